@@ -1,0 +1,399 @@
+"""Exact event-driven simulation of the LO + ball system.
+
+Between events every flow is closed-form (see :mod:`.flows`): the LO is a linear
+oscillator under harmonic base forcing plus a constant force, the ball has constant
+acceleration. Events are found on a grid of at most ``1/grid_per_period`` of the
+shortest period, by sign changes of the event functions and of z' (so that a
+crossing hidden between two grid points, near grazing, is found via the extremum of
+z), then refined by a bracketed Newton iteration:
+
+* ``z = +b`` (right wall) and ``z = -b`` (left wall): an impact, Newton's law with
+  momentum conservation and the wall's restitution law;
+* ``z' = 0`` with friction: the ball sticks to the LO if static friction holds, or
+  slides the other way;
+* release of a stuck ball: the friction needed to keep it with the LO exceeds
+  ``mu m2 g`` (or the wall no longer pushes it).
+
+A rebound slower than ``stick_speed`` sticks the ball to the wall (no Zeno chatter)
+and the number of events is bounded, so the loop always terminates.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.optimize import brentq
+
+from ..effects import Effects
+from ..errors import InputError
+from ..params import G_ACCEL, SystemParams
+from .flows import BaseMotion, Oscillator
+from .result import SimulationResult
+from .roots import bracketed_newton
+
+__all__ = ["simulate", "SimOptions"]
+
+FLIGHT, STUCK = 0, 1
+RIGHT, LEFT, MIDDLE = 1, -1, 0
+
+
+@dataclass(frozen=True)
+class SimOptions:
+    """Numerical and initial-condition options of :func:`simulate`.
+
+    Parameters
+    ----------
+    settle : float
+        Time simulated before the record starts (s); long enough to reach the
+        steady state (default 20 s, 160 forcing periods at 8 Hz).
+    duration : float
+        Length of the record after the settle (s).
+    initial : tuple of 4 floats or None
+        (x, x', y, y') at t = 0. Default: LO at rest, ball at the centre with
+        velocity ``ball_speed`` (so that impacting branches are found at large b).
+    ball_speed : float
+        Initial ball speed (m/s) when ``initial`` is None.
+    stick_speed : float
+        A rebound with relative speed below this (m/s) sticks the ball to the wall.
+    grid_per_period : int
+        Event-search grid points per shortest period of the system.
+    max_events : int or None
+        Bound on the number of events (default: 400 per forcing period).
+    """
+
+    settle: float = 20.0
+    duration: float = 5.12
+    initial: tuple | None = None
+    ball_speed: float = 0.6
+    stick_speed: float = 1e-4
+    grid_per_period: int = 64
+    max_events: int | None = None
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.settle) and self.settle >= 0):
+            raise InputError(f"settle must be >= 0 s, was {self.settle!r}")
+        if not (math.isfinite(self.duration) and self.duration > 0):
+            raise InputError(f"duration must be > 0 s, was {self.duration!r}")
+        if self.initial is not None and len(self.initial) != 4:
+            raise InputError("initial must be (x, x', y, y'), 4 numbers, "
+                             f"was {self.initial!r}")
+        if self.grid_per_period < 8:
+            raise InputError(f"grid_per_period must be >= 8, was {self.grid_per_period!r}")
+        if not self.stick_speed >= 0:
+            raise InputError(f"stick_speed must be >= 0 m/s, was {self.stick_speed!r}")
+
+
+class _Model:
+    """Everything the loop needs, resolved once from params + effects."""
+
+    def __init__(self, p: SystemParams, fx: Effects, opt: SimOptions) -> None:
+        self.p, self.fx, self.opt = p, fx, opt
+        self.b = p.b + fx.db
+        if self.b <= 0:
+            raise InputError(f"clearance_error db = {fx.db!r} m makes the half-clearance "
+                             f"b + db <= 0 (b = {p.b!r} m)")
+        self.m1, self.m2, self.M = p.m1, p.m2, p.m1 + p.m2
+        self.mu = fx.mu
+        self.gs = G_ACCEL * math.sin(math.radians(fx.theta_deg))
+        self.mug = self.mu * G_ACCEL
+        self.base = BaseMotion(p.amplitude, p.frequency, tuple(fx.harmonics()))
+        self.free = Oscillator(p.m1, p.c1, p.k1, self.base)
+        self.stuck = Oscillator(self.M, p.c1, p.k1, self.base)
+        shortest = min(2 * math.pi / float(self.base.omegas.max()),
+                       2 * math.pi / self.free.wd, 2 * math.pi / self.stuck.wd)
+        self.h = shortest / opt.grid_per_period
+        self.laws = fx.restitution_laws(p.r)
+        self.drift = None
+        if "restitution_drift" in fx:
+            self.drift = (fx.value("restitution_drift", "side"),
+                          float(fx.value("restitution_drift", "rate")))
+
+    def restitution(self, side: int, speed: float, t: float) -> float:
+        name = "right" if side == RIGHT else "left"
+        r = self.laws[name](speed)
+        if self.drift is not None and self.drift[0] == name:
+            r = min(1.0, max(0.0, r + self.drift[1] * max(t - self.opt.settle, 0.0)))
+        return r
+
+    def stuck_q(self, t: float, x: float, v: float) -> float:
+        """Friction acceleration needed to keep the ball with the LO, minus g sin(theta)."""
+        xe = vxe = 0.0
+        for w, bj in zip(self.base.omegas, self.base.complex_amplitudes):
+            s, c = math.sin(w * t), math.cos(w * t)
+            xe += bj.real * s + bj.imag * c
+            vxe += w * (bj.real * c - bj.imag * s)
+        acc = (self.p.c1 * (vxe - v) + self.p.k1 * (xe - x) + self.m2 * self.gs) / self.M
+        return acc - self.gs
+
+
+def simulate(params: SystemParams, effects: Effects | None = None,
+             options: SimOptions | None = None, **option_kw) -> SimulationResult:
+    """Simulate the LO + ball system exactly (event-driven, closed-form flows).
+
+    Parameters
+    ----------
+    params : SystemParams
+        Physical parameters (``params.b`` is the nominal half-clearance).
+    effects : Effects, optional
+        Switched-on effects (default: none, the paper's nominal model).
+    options : SimOptions, optional
+        Numerical and initial-condition options; keyword arguments override fields.
+
+    Returns
+    -------
+    SimulationResult
+        Piecewise closed-form trajectory, impacts, sticking phases, status.
+
+    Examples
+    --------
+    >>> from vidiscover import preset, simulate
+    >>> res = simulate(preset("paper", b=0.009), settle=2.0, duration=1.0)
+    >>> res.status, res.impacts.n > 0
+    (0, True)
+    """
+    effects = effects if effects is not None else Effects()
+    options = options if options is not None else SimOptions()
+    if option_kw:
+        import dataclasses
+        known = {f.name for f in dataclasses.fields(SimOptions)}
+        unknown = sorted(set(option_kw) - known)
+        if unknown:
+            raise InputError(f"unknown simulation option(s) {', '.join(unknown)}; "
+                             f"known: {', '.join(sorted(known))}")
+        options = dataclasses.replace(options, **option_kw)
+    model = _Model(params, effects, options)
+    return _Loop(model).run()
+
+
+class _Loop:
+    def __init__(self, model: _Model) -> None:
+        self.m = model
+        opt = model.opt
+        self.t_end = opt.settle + opt.duration
+        periods = self.t_end * model.p.frequency
+        self.max_events = opt.max_events or int(400 * max(periods, 1.0)) + 100
+        self.segs: list[tuple] = []
+        self.impacts: list[tuple] = []
+        self.sticks: list[tuple] = []
+        self.n_events = 0
+
+    # ------------------------------------------------------------------ loop
+    def run(self) -> SimulationResult:
+        m, opt = self.m, self.m.opt
+        if opt.initial is None:
+            x, v, y, w = 0.0, 0.0, 0.0, float(opt.ball_speed)
+        else:
+            x, v, y, w = (float(s) for s in opt.initial)
+            if abs(y - x) > m.b:
+                raise InputError(f"initial ball position is outside the clearance: "
+                                 f"|y - x| = {abs(y - x)!r} m > b = {m.b!r} m")
+        t = 0.0
+        mode, where, wall = FLIGHT, MIDDLE, MIDDLE
+        status, message = 0, "reached the end of the record"
+        s = self._slide_sign(t, x, v, w - v, wall)
+        if s is None:
+            mode, s = STUCK, 0
+        while t < self.t_end:
+            if self.n_events >= self.max_events:
+                status = 1
+                message = (f"stopped after {self.n_events} events (max_events) at t = {t:.6g} s")
+                break
+            self.n_events += 1
+            if mode == FLIGHT:
+                t, x, v, y, w, kind = self._flight(t, x, v, y, w, s, wall)
+                wall = MIDDLE
+                if kind == "end":
+                    break
+                if kind == "zero":
+                    w = v  # exactly zero relative velocity at the reversal
+                    s = self._slide_sign(t, x, v, 0.0, MIDDLE)
+                    if s is None:
+                        mode, where, w = STUCK, MIDDLE, v
+                    continue
+                side = kind
+                v, w, stuck = self._impact(t, x, v, y, w, side)
+                wall = side
+                if stuck:
+                    s = self._slide_sign(t, x, v, 0.0, side)
+                    if s is None:
+                        mode, where = STUCK, side
+                else:
+                    s = 1 if (w - v) > 0 else -1
+            else:
+                t0 = t
+                t, x, v, y, w, s = self._stuck(t, x, v, y, where)
+                self.sticks.append((t0, t, where))
+                wall = where
+                mode = FLIGHT
+                if s == 0:
+                    break
+        return SimulationResult.from_loop(self.m, self.segs, self.impacts, self.sticks,
+                                          status, message, self.n_events)
+
+    def _slide_sign(self, t: float, x: float, v: float, zd: float, wall: int) -> int | None:
+        """Direction of relative sliding, or None if the ball stays with the LO."""
+        m = self.m
+        if abs(zd) > 0.0:
+            return 1 if zd > 0 else -1
+        q = m.stuck_q(t, x, v)
+        if wall == RIGHT:
+            holds = q <= m.mug
+        elif wall == LEFT:
+            holds = q >= -m.mug
+        else:
+            holds = abs(q) <= m.mug and m.mug > 0
+        if holds:
+            return None
+        if m.mug == 0.0 and wall == MIDDLE:
+            return 1 if q < 0 else -1
+        return -1 if q > 0 else 1
+
+    # ------------------------------------------------------------------ flight
+    def _flight(self, t0, x0, v0, y0, w0, s, start_wall):
+        m = self.m
+        b, osc = m.b, m.free
+        friction = m.mug > 0.0
+        ab = m.gs - m.mug * s
+        F0 = m.mu * m.m2 * G_ACCEL * s
+        C1, C2 = osc.coefficients(t0, x0, v0, F0)
+
+        def zf(t):
+            xx, vv, aa = osc.state(t, t0, C1, C2, F0)
+            tau = t - t0
+            return y0 + w0 * tau + 0.5 * ab * tau * tau - xx, w0 + ab * tau - vv, ab - aa
+
+        def f_right(t):
+            z, zd, _ = zf(t)
+            return z - b, zd
+
+        def f_left(t):
+            z, zd, _ = zf(t)
+            return z + b, zd
+
+        def f_zero(t):
+            _, zd, zdd = zf(t)
+            return zd, zdd
+
+        n = 64
+        B0, B1, _ = osc.window_basis(m.h, n)
+        ta = t0
+        while ta < self.t_end:
+            cz = osc.window_coeffs(ta, t0, C1, C2, F0)
+            tau = ta - t0
+            cz = [-c for c in cz]
+            cz[0] += y0 + w0 * tau + 0.5 * ab * tau * tau
+            cz[1] += w0 + ab * tau
+            cz[2] += 0.5 * ab
+            z = B0 @ cz
+            zd = B1 @ cz
+            # candidate intervals: a wall crossed, or an extremum of z inside
+            cand = (z[1:] >= b) | (z[1:] <= -b) | (zd[:-1] * zd[1:] < 0.0)
+            for k in np.flatnonzero(cand):
+                ev = self._interval(ta + k * m.h, ta + (k + 1) * m.h, float(z[k]),
+                                    float(z[k + 1]), float(zd[k]), float(zd[k + 1]),
+                                    t0, start_wall, friction, f_right, f_left, f_zero, zf)
+                if ev is not None:
+                    te, kind = ev
+                    if te >= self.t_end:
+                        break
+                    return self._end_flight(te, kind, t0, C1, C2, F0, y0, w0, ab)
+            ta += n * m.h
+        return self._end_flight(self.t_end, "end", t0, C1, C2, F0, y0, w0, ab)
+
+    def _interval(self, ta, tb, za, zb, zda, zdb, t0, start_wall, friction,
+                  f_right, f_left, f_zero, zf):
+        b = self.m.b
+        pieces = [(ta, za, tb, zb, False)]
+        if zda * zdb < 0.0:
+            te = bracketed_newton(f_zero, ta, tb, zda, zdb)
+            ze = zf(te)[0]
+            pieces = [(ta, za, te, ze, True), (te, ze, tb, zb, False)]
+        for (p, zp, q, zq, ends_at_extremum) in pieces:
+            at_start = abs(p - t0) <= 1e-15 * max(1.0, abs(t0))
+            if not (at_start and start_wall == RIGHT) and zp - b < 0.0 <= zq - b:
+                return bracketed_newton(f_right, p, q, zp - b, zq - b), RIGHT
+            if not (at_start and start_wall == LEFT) and zp + b > 0.0 >= zq + b:
+                return bracketed_newton(f_left, p, q, zp + b, zq + b), LEFT
+            if ends_at_extremum and friction and q - t0 > 1e-12:
+                return q, "zero"
+        return None
+
+    def _end_flight(self, te, kind, t0, C1, C2, F0, y0, w0, ab):
+        m = self.m
+        x, v, _ = m.free.state(te, t0, C1, C2, F0)
+        tau = te - t0
+        y = y0 + w0 * tau + 0.5 * ab * tau * tau
+        w = w0 + ab * tau
+        if kind == RIGHT:
+            y = x + m.b
+        elif kind == LEFT:
+            y = x - m.b
+        self.segs.append((t0, te, FLIGHT, C1, C2, F0, y0, w0, ab, 0.0))
+        return te, x, v, y, w, kind
+
+    # ------------------------------------------------------------------ impact
+    def _impact(self, t, x, v, y, w, side):
+        m = self.m
+        u = w - v                                # relative velocity before (z'-)
+        speed = abs(u)
+        r = m.restitution(side, speed, t)
+        up = -r * u
+        P = m.m1 * v + m.m2 * w
+        stuck = abs(up) < m.opt.stick_speed
+        if stuck:
+            up = 0.0
+        vp = (P - m.m2 * up) / m.M
+        wp = vp + up
+        self.impacts.append((t, side, u, up, r, v, vp, w, wp, x, stuck))
+        return vp, wp, stuck
+
+    # ------------------------------------------------------------------ stuck
+    def _stuck(self, t0, x0, v0, y0, where):
+        m = self.m
+        osc, F0 = m.stuck, m.m2 * m.gs
+        zc = y0 - x0
+        C1, C2 = osc.coefficients(t0, x0, v0, F0)
+        mug = m.mug
+        if where == RIGHT:
+            def released(q):
+                return q > mug
+        elif where == LEFT:
+            def released(q):
+                return q < -mug
+        else:
+            def released(q):
+                return np.abs(q) > mug
+
+        def qf(t, thr):
+            _, _, a = osc.state(t, t0, C1, C2, F0)
+            return a - m.gs - thr
+
+        n = 64
+        _, _, B2 = osc.window_basis(m.h, n)
+        ta = t0
+        while ta < self.t_end:
+            q = B2 @ osc.window_coeffs(ta, t0, C1, C2, F0) - m.gs
+            rel = released(q)
+            rel[0] = False
+            hits = np.flatnonzero(rel)
+            if hits.size:
+                k = int(hits[0])
+                thr = mug if q[k] > 0 else -mug
+                lo, hi = ta + (k - 1) * m.h, ta + k * m.h
+                if (q[k - 1] - thr) * (q[k] - thr) > 0:   # released already at the start
+                    te = lo
+                else:
+                    te = brentq(qf, lo, hi, args=(thr,), xtol=1e-14, rtol=1e-15)
+                te = min(te, self.t_end)
+                x, v, _ = osc.state(te, t0, C1, C2, F0)
+                self.segs.append((t0, te, STUCK, C1, C2, F0, zc, 0.0, 0.0, 1.0))
+                s = -1 if q[k] > 0 else 1
+                if te >= self.t_end:
+                    s = 0
+                return te, x, v, x + zc, v, s
+            ta += n * m.h
+        x, v, _ = osc.state(self.t_end, t0, C1, C2, F0)
+        self.segs.append((t0, self.t_end, STUCK, C1, C2, F0, zc, 0.0, 0.0, 1.0))
+        return self.t_end, x, v, x + zc, v, 0
