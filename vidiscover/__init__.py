@@ -4,31 +4,44 @@ A ball rattles inside a clearance of a linear oscillator (LO) driven by a shaker
 From the LO displacement and acceleration and the base motion alone, vidiscover
 simulates, analyses, discovers laws, classifies regimes and diagnoses the
 sim-to-real gap. See README.md for the command line.
+
+Public names are imported lazily (PEP 562) so that ``vidiscover --help`` starts
+fast; ``from vidiscover import simulate`` works as usual.
 """
 
-from .effects import EFFECTS, Effects
-from .errors import InputError
-from .params import PRESETS, SystemParams, preset
-from .recording import Metadata, Recording
-from .restitution_laws import RestitutionLaw
-from .sensors import SensorConfig, record
-from .simulation import SimOptions, SimulationResult, simulate
+from __future__ import annotations
+
+import importlib
 
 __version__ = "0.1.0"
 
-__all__ = [
-    "EFFECTS",
-    "Effects",
-    "InputError",
-    "Metadata",
-    "PRESETS",
-    "Recording",
-    "RestitutionLaw",
-    "SensorConfig",
-    "SimOptions",
-    "SimulationResult",
-    "SystemParams",
-    "preset",
-    "record",
-    "simulate",
-]
+_LAZY = {
+    "EFFECTS": "effects",
+    "Effects": "effects",
+    "InputError": "errors",
+    "Metadata": "recording",
+    "PRESETS": "params",
+    "Recording": "recording",
+    "RestitutionLaw": "restitution_laws",
+    "SensorConfig": "sensors",
+    "SimOptions": "simulation",
+    "SimulationResult": "simulation",
+    "SystemParams": "params",
+    "preset": "params",
+    "record": "sensors",
+    "simulate": "simulation",
+}
+
+__all__ = sorted(_LAZY)
+
+
+def __getattr__(name: str):
+    if name in _LAZY:
+        value = getattr(importlib.import_module(f".{_LAZY[name]}", __name__), name)
+        globals()[name] = value
+        return value
+    raise AttributeError(f"module 'vidiscover' has no attribute {name!r}")
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(__all__))

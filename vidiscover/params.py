@@ -26,15 +26,15 @@ __all__ = ["SystemParams", "PRESETS", "preset", "G_ACCEL"]
 G_ACCEL = 9.81
 
 
-def _check_positive(name: str, value: float, unit: str, upper: float | None = None,
-                    hint: str = "") -> None:
+def _check_positive(name: str, value: float, unit: str, what: str,
+                    upper: float | None = None, hint: str = "check the units") -> None:
     if not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise InputError(f"{name} must be a finite number ({unit}), was {value!r}")
+        raise InputError(f"{name} must be a finite number ({what}, {unit}), was {value!r}")
     if value <= 0:
-        raise InputError(f"{name} must be > 0 ({unit}), was {value!r}")
+        raise InputError(f"{name} must be > 0 ({what}, {unit}), was {value!r}")
     if upper is not None and value > upper:
-        raise InputError(f"{name} = {value!r} {unit} is implausibly large (limit {upper}); "
-                         f"{hint or 'check the units'}")
+        raise InputError(f"{name} = {value!r} {unit} is implausibly large for the {what} "
+                         f"(limit {upper:g} {unit}); {hint}")
 
 
 @dataclass(frozen=True)
@@ -66,14 +66,14 @@ class SystemParams:
     r: float = 0.88
 
     def __post_init__(self) -> None:
-        _check_positive("m1", self.m1, "kg, LO mass", 1e4)
-        _check_positive("m2", self.m2, "kg, ball mass", 1e3)
-        _check_positive("k1", self.k1, "N/m, LO stiffness")
-        _check_positive("b", self.b, "m, half-clearance", 1.0,
+        _check_positive("m1", self.m1, "kg", "LO mass", 1e4)
+        _check_positive("m2", self.m2, "kg", "ball mass", 1e3)
+        _check_positive("k1", self.k1, "N/m", "LO stiffness")
+        _check_positive("b", self.b, "m", "half-clearance", 1.0,
                         "b is in metres, e.g. 0.009 for 9 mm")
-        _check_positive("amplitude", self.amplitude, "m, base amplitude", 0.1,
+        _check_positive("amplitude", self.amplitude, "m", "base amplitude", 0.1,
                         "the amplitude is in metres, e.g. 0.0005 for 0.5 mm")
-        _check_positive("frequency", self.frequency, "Hz, forcing frequency", 1e4)
+        _check_positive("frequency", self.frequency, "Hz", "forcing frequency", 1e4)
         if not (isinstance(self.c1, (int, float)) and math.isfinite(self.c1) and self.c1 >= 0):
             raise InputError(f"c1 must be >= 0 (N s/m, LO damping), was {self.c1!r}")
         if self.c1 >= 2.0 * math.sqrt(self.k1 * self.m1):

@@ -1,0 +1,69 @@
+import json
+
+import pytest
+from click.testing import CliRunner
+
+from vidiscover.cli import main
+
+FAST = ["--settle", "2", "--duration", "1.5"]
+
+
+@pytest.fixture()
+def runner():
+    return CliRunner()
+
+
+def test_help_lists_the_commands(runner):
+    res = runner.invoke(main, ["--help"])
+    assert res.exit_code == 0
+    for cmd in ("simulate", "demo"):
+        assert cmd in res.output
+
+
+def test_simulate_writes_recording_metadata_truth_and_json(runner, tmp_path):
+    out = tmp_path / "rec.csv"
+    res = runner.invoke(main, ["simulate", "--b", "0.009", "--effect", "coulomb_friction=0.1",
+                               "--seed", "3", "--out", str(out), "--json", *FAST])
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.stdout)
+    assert {"impacts", "regime"} <= set(doc)
+    assert doc["impacts"]["n"] == len(doc["impacts"]["t"]) > 0
+    assert set(doc["impacts"]["side"]) <= {"right", "left"}
+    assert doc["effects"] == {"coulomb_friction": {"mu": 0.1}}
+    for f in ("rec.csv", "rec.json", "rec.truth.json"):
+        assert (tmp_path / f).exists()
+    truth = json.loads((tmp_path / "rec.truth.json").read_text())
+    assert truth["regime"]["label"] == doc["regime"]["label"]
+    assert len(truth["impacts"]) == doc["impacts"]["n"]
+
+
+def test_simulate_is_deterministic(runner, tmp_path):
+    a, b = tmp_path / "a.csv", tmp_path / "b.csv"
+    for out in (a, b):
+        assert runner.invoke(main, ["simulate", "--seed", "7", "--out", str(out), *FAST]
+                             ).exit_code == 0
+    assert a.read_bytes() == b.read_bytes()
+
+
+@pytest.mark.parametrize("args,match", [
+    (["--b", "-0.009"], "b must be > 0"),
+    (["--b", "9"], "implausibly large"),
+    (["--effect", "friction=0.3"], "unknown effect 'friction'"),
+    (["--effect", "coulomb_friction=abc"], "mu must be in"),
+    (["--param", "m2"], "expected NAME=VALUE"),
+    (["--param", "mass=3"], "unknown parameter"),
+    (["--noise", "-1"], "--noise must be >= 0"),
+])
+def test_simulate_bad_input_one_line_exit_2_no_files(runner, tmp_path, args, match):
+    out = tmp_path / "rec.csv"
+    res = runner.invoke(main, ["simulate", *args, "--out", str(out), *FAST])
+    assert res.exit_code == 2
+    assert match in res.stderr
+    assert res.stderr.count("\n") == 1 and "Traceback" not in res.stderr
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_simulate_unknown_format(runner, tmp_path):
+    res = runner.invoke(main, ["simulate", "--out", str(tmp_path / "rec.xlsx"), *FAST])
+    assert res.exit_code == 2 and "unknown format '.xlsx'" in res.stderr
+    assert list(tmp_path.iterdir()) == []

@@ -1,0 +1,95 @@
+"""The ground-truth labeller follows DESIGN.md section 4 rule by rule."""
+
+import numpy as np
+import pytest
+
+from vidiscover import Effects, preset, simulate
+from vidiscover.regimes import LABELS, label_simulation
+from vidiscover.regimes.labels import label_from_events
+
+T = 0.125
+N_CYC = 40
+STARTS = np.arange(N_CYC + 1) * T
+
+
+def _label(times, sides, amp=None, strobe=None):
+    amp = np.full(N_CYC, 5e-3) if amp is None else amp
+    if strobe is None:
+        strobe = (np.full(N_CYC, 1e-3), np.full(N_CYC, 0.1))
+    return label_from_events(np.asarray(times, float), np.asarray(sides), STARTS, amp,
+                             strobe[0], strobe[1], 6e-3, 0.3, T)
+
+
+def _per_cycle(offsets, sides):
+    t = [k * T + o for k in range(N_CYC) for o in offsets]
+    s = [sd for _ in range(N_CYC) for sd in sides]
+    return t, s
+
+
+def test_labels_are_the_contract():
+    assert LABELS == ("no_impact", "1ipc", "2ipc_sym", "2ipc_asym", "multi_ipc", "smr",
+                      "chaotic")
+
+
+def test_no_impact():
+    assert _label([0.3], [1]).label == "no_impact"  # ipc = 1/40 < 0.05
+
+
+def test_one_impact_per_cycle():
+    assert _label(*_per_cycle([0.03], [1])).label == "1ipc"
+
+
+def test_two_symmetric_and_asymmetric():
+    sym = _label(*_per_cycle([0.01, 0.01 + T / 2], [1, -1]))
+    assert sym.label == "2ipc_sym" and sym.asym < 1e-9
+    asym = _label(*_per_cycle([0.01, 0.01 + 0.35 * T], [1, -1]))
+    assert asym.label == "2ipc_asym"
+    assert asym.asym == pytest.approx(0.3, abs=1e-9)  # |0.35 - 0.65|
+
+
+def test_two_impacts_on_the_same_wall_are_multi():
+    assert _label(*_per_cycle([0.01, 0.05], [1, 1])).label == "multi_ipc"
+
+
+def test_three_impacts_are_multi():
+    assert _label(*_per_cycle([0.01, 0.05, 0.09], [1, -1, -1])).label == "multi_ipc"
+
+
+def test_not_periodic_is_chaotic():
+    rng = np.random.default_rng(0)
+    strobe = (rng.normal(0, 1e-3, N_CYC), rng.normal(0, 0.1, N_CYC))
+    assert _label(*_per_cycle([0.01, 0.07], [1, -1]), strobe=strobe).label == "chaotic"
+
+
+def test_period_two_strobe_still_periodic():
+    strobe = (np.tile([1e-3, 2e-3], N_CYC // 2), np.tile([0.1, 0.2], N_CYC // 2))
+    lab = _label(*_per_cycle([0.01, 0.07], [1, -1]), strobe=strobe)
+    assert lab.periodic and lab.period == 2
+
+
+def test_smr_needs_intermittency_and_modulation():
+    t, s = _per_cycle([0.01, 0.07], [1, -1])
+    keep = np.array([(k // 5) % 2 == 0 for k in range(N_CYC) for _ in range(2)])
+    t, s = np.array(t)[keep], np.array(s)[keep]
+    amp = np.where(np.arange(N_CYC) % 10 < 5, 8e-3, 3e-3)
+    assert _label(t, s, amp=amp).label == "smr"
+    flat = _label(t, s, amp=np.full(N_CYC, 5e-3))   # intermittent, no modulation
+    assert flat.label == "chaotic"
+
+
+def test_simulated_wide_clearance_is_two_symmetric_impacts():
+    res = simulate(preset("paper", b=0.03), settle=10.0, duration=5.12)
+    lab = label_simulation(res)
+    assert lab.label == "2ipc_sym", lab
+
+
+def test_simulated_huge_clearance_has_no_impact():
+    res = simulate(preset("paper", b=0.2), settle=2.0, duration=5.12, ball_speed=0.0)
+    assert label_simulation(res).label == "no_impact"
+
+
+def test_simulated_low_left_restitution_chatters_into_multi_ipc():
+    res = simulate(preset("paper", b=0.009), Effects.parse(["asymmetric_restitution=0.88,0.2"]),
+                   settle=10.0)
+    lab = label_simulation(res)
+    assert lab.label == "multi_ipc" and lab.ipc > 3

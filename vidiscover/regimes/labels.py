@@ -1,0 +1,177 @@
+"""Ground-truth regime labels from a simulated state (DESIGN.md section 4, a contract).
+
+With T = 1/f and cycles cut at base phase 0 (simulation times k T), n_k impacts in
+cycle k, ipc = mean n_k, phi = share of cycles with n_k >= 1, A_k = half the
+peak-to-peak LO displacement in cycle k, M = (P95(A) - P5(A)) / (P95(A) + P5(A)) and
+asym = |mean(dt after a right impact) - mean(dt after a left impact)| / T over
+alternating pairs:
+
+- ``no_impact``: ipc < 0.05
+- ``smr``: phi < 0.9 and M >= 0.15
+- ``1ipc``: phi >= 0.9, periodic, n_k = 1 in >= 90 % of cycles
+- ``2ipc_sym``: phi >= 0.9, periodic, n_k = 2 in >= 90 % of cycles, sides alternate,
+  asym < 0.1
+- ``2ipc_asym``: as ``2ipc_sym`` but asym >= 0.1
+- ``multi_ipc``: phi >= 0.9, periodic, anything else
+- ``chaotic``: everything else
+
+"Periodic": over the last half of the record, the stroboscopic LO state (x, x') at
+cycle starts repeats with some period p <= 4 cycles, each component to within 1 %
+of that component's amplitude (max |x|, max |x'| over the record).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+__all__ = ["LABELS", "RegimeTruth", "label_simulation", "label_from_events"]
+
+#: Regime labels, a contract (DESIGN.md section 4), from simple to complex.
+LABELS: tuple[str, ...] = ("no_impact", "1ipc", "2ipc_sym", "2ipc_asym", "multi_ipc",
+                           "smr", "chaotic")
+
+
+@dataclass(frozen=True)
+class RegimeTruth:
+    """A label with the quantities that decided it.
+
+    Attributes
+    ----------
+    label : str
+        One of :data:`LABELS`.
+    ipc, phi, M, asym : float
+        Impacts per cycle, share of impacting cycles, modulation index, asymmetry.
+    periodic : bool
+        Stroboscopic state repeats with a period <= 4 cycles.
+    period : int or None
+        The smallest such period.
+    share_n1, share_n2 : float
+        Share of cycles with exactly one / two impacts.
+    alternate : float
+        Share of consecutive impact pairs on opposite walls.
+    n_cycles : int
+        Number of complete cycles in the record.
+    """
+
+    label: str
+    ipc: float
+    phi: float
+    M: float
+    asym: float
+    periodic: bool
+    period: int | None
+    share_n1: float
+    share_n2: float
+    alternate: float
+    n_cycles: int
+
+    def to_dict(self) -> dict:
+        """JSON-ready form."""
+        return asdict(self)
+
+
+def _is_periodic(strobe_x: np.ndarray, strobe_v: np.ndarray, amp_x: float, amp_v: float,
+                 max_period: int = 4, tol: float = 0.01) -> int | None:
+    n = strobe_x.size
+    half = strobe_x[n // 2:], strobe_v[n // 2:]
+    for p in range(1, max_period + 1):
+        if half[0].size <= p:
+            break
+        dx = np.abs(half[0][p:] - half[0][:-p]).max()
+        dv = np.abs(half[1][p:] - half[1][:-p]).max()
+        if dx <= tol * amp_x and dv <= tol * amp_v:
+            return p
+    return None
+
+
+def label_from_events(t_imp: np.ndarray, side_imp: np.ndarray, cycle_starts: np.ndarray,
+                      amp_cycle: np.ndarray, strobe_x: np.ndarray, strobe_v: np.ndarray,
+                      amp_x: float, amp_v: float, period: float) -> RegimeTruth:
+    """Apply the label rules to impact events and per-cycle LO quantities.
+
+    Parameters
+    ----------
+    t_imp, side_imp : ndarray
+        Impact times (s) and sides (+1 right, -1 left), sorted by time.
+    cycle_starts : ndarray
+        Start times of the complete cycles (base phase 0), plus the end of the last.
+    amp_cycle : ndarray
+        Half peak-to-peak LO displacement per cycle.
+    strobe_x, strobe_v : ndarray
+        LO displacement and velocity at the cycle starts.
+    amp_x, amp_v : float
+        max |x| and max |x'| over the record.
+    period : float
+        Forcing period T (s).
+    """
+    n_cycles = cycle_starts.size - 1
+    counts = np.histogram(t_imp, bins=cycle_starts)[0] if n_cycles > 0 else np.zeros(0)
+    ipc = float(counts.mean()) if n_cycles else 0.0
+    phi = float((counts >= 1).mean()) if n_cycles else 0.0
+    if amp_cycle.size:
+        p5, p95 = np.percentile(amp_cycle, [5, 95])
+        M = float((p95 - p5) / (p95 + p5)) if (p95 + p5) > 0 else 0.0
+    else:
+        M = 0.0
+    dt = np.diff(t_imp)
+    alt = side_imp[1:] != side_imp[:-1]
+    alternate = float(alt.mean()) if alt.size else 0.0
+    after_right = dt[alt & (side_imp[:-1] > 0)]
+    after_left = dt[alt & (side_imp[:-1] < 0)]
+    if after_right.size and after_left.size:
+        asym = float(abs(after_right.mean() - after_left.mean()) / period)
+    else:
+        asym = 0.0
+    per = _is_periodic(strobe_x, strobe_v, amp_x, amp_v) if strobe_x.size >= 4 else None
+    share1 = float((counts == 1).mean()) if n_cycles else 0.0
+    share2 = float((counts == 2).mean()) if n_cycles else 0.0
+    if ipc < 0.05:
+        label = "no_impact"
+    elif phi < 0.9 and M >= 0.15:
+        label = "smr"
+    elif phi >= 0.9 and per is not None:
+        if share1 >= 0.9:
+            label = "1ipc"
+        elif share2 >= 0.9 and alternate >= 0.9:
+            label = "2ipc_sym" if asym < 0.1 else "2ipc_asym"
+        else:
+            label = "multi_ipc"
+    else:
+        label = "chaotic"
+    return RegimeTruth(label, ipc, phi, M, asym, per is not None, per, share1, share2,
+                       alternate, int(n_cycles))
+
+
+def label_simulation(result, sample_rate: float = 6400.0) -> RegimeTruth:
+    """Ground-truth label of the record window of a :class:`SimulationResult`.
+
+    Parameters
+    ----------
+    result : SimulationResult
+        The simulation (its record is [settle, settle + duration]).
+    sample_rate : float
+        Rate at which the true LO motion is sampled for amplitudes.
+
+    Returns
+    -------
+    RegimeTruth
+    """
+    T = result.params.period
+    t0, t1 = result.settle, result.settle + result.duration
+    k0, k1 = int(np.ceil(t0 / T - 1e-9)), int(np.floor(t1 / T + 1e-9))
+    starts = np.arange(k0, k1 + 1) * T
+    imp = result.record_impacts()
+    ts = np.arange(int(round(result.duration * sample_rate))) / sample_rate + t0
+    st = result.evaluate(ts)
+    x, v = st["x"], st["xd"]
+    amp = []
+    for a, b in zip(starts[:-1], starts[1:]):
+        seg = x[(ts >= a) & (ts < b)]
+        if seg.size:
+            amp.append(0.5 * (seg.max() - seg.min()))
+    strobe = result.evaluate(starts[:-1]) if starts.size > 1 else {"x": np.zeros(0),
+                                                                   "xd": np.zeros(0)}
+    return label_from_events(imp.t, imp.side, starts, np.asarray(amp), strobe["x"],
+                             strobe["xd"], float(np.abs(x).max()), float(np.abs(v).max()), T)
