@@ -52,8 +52,12 @@ def plot_recording(rec: Recording, truth: dict | None = None, path: Path | None 
         for side, marker, color in (("right", "x", "C3"), ("left", "+", "C1")):
             ti = np.array([i["t"] for i in imps if i["side"] == side])
             if ti.size:
-                ax[0, 0].plot(ti, np.interp(ti, rec.t, rec.a), marker, color=color, ms=6,
-                              label=f"{side} impacts")
+                # mark each impact at the pulse's extreme sample (sign of the wall)
+                k = np.searchsorted(rec.t, ti)
+                win = np.clip(k[:, None] + np.arange(-2, 3), 0, rec.n - 1)
+                vals = rec.a[win]
+                peak = vals.max(axis=1) if side == "right" else vals.min(axis=1)
+                ax[0, 0].plot(ti, peak, marker, color=color, ms=6, label=f"{side} impacts")
         mot = truth["motion"]
         y = np.asarray(mot["y"])[: sel.sum()]
         xt = np.asarray(mot["x"])[: sel.sum()]

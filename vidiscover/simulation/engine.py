@@ -36,6 +36,7 @@ from .roots import bracketed_newton
 __all__ = ["simulate", "SimOptions"]
 
 FLIGHT, STUCK = 0, 1
+_WINDOW = 64  # event-grid intervals evaluated per vectorised window
 RIGHT, LEFT, MIDDLE = 1, -1, 0
 
 
@@ -99,11 +100,15 @@ class _Model:
         self.gs = G_ACCEL * math.sin(math.radians(fx.theta_deg))
         self.mug = self.mu * G_ACCEL
         self.base = BaseMotion(p.amplitude, p.frequency, tuple(fx.harmonics()))
+        self._base_terms = [(float(w), float(bj.real), float(bj.imag)) for w, bj in
+                            zip(self.base.omegas, self.base.complex_amplitudes, strict=True)]
         self.free = Oscillator(p.m1, p.c1, p.k1, self.base)
         self.stuck = Oscillator(self.M, p.c1, p.k1, self.base)
         shortest = min(2 * math.pi / float(self.base.omegas.max()),
                        2 * math.pi / self.free.wd, 2 * math.pi / self.stuck.wd)
         self.h = shortest / opt.grid_per_period
+        # z and z' of a flight on a window of the event grid, in one product
+        self.free_basis = np.vstack(self.free.window_basis(self.h, _WINDOW)[:2])
         self.laws = fx.restitution_laws(p.r)
         self.drift = None
         if "restitution_drift" in fx:
@@ -120,10 +125,10 @@ class _Model:
     def stuck_q(self, t: float, x: float, v: float) -> float:
         """Friction acceleration needed to keep the ball with the LO, minus g sin(theta)."""
         xe = vxe = 0.0
-        for w, bj in zip(self.base.omegas, self.base.complex_amplitudes):
+        for w, br, bi in self._base_terms:
             s, c = math.sin(w * t), math.cos(w * t)
-            xe += bj.real * s + bj.imag * c
-            vxe += w * (bj.real * c - bj.imag * s)
+            xe += br * s + bi * c
+            vxe += w * (br * c - bi * s)
         acc = (self.p.c1 * (vxe - v) + self.p.k1 * (xe - x) + self.m2 * self.gs) / self.M
         return acc - self.gs
 
@@ -165,6 +170,26 @@ def simulate(params: SystemParams, effects: Effects | None = None,
         options = dataclasses.replace(options, **option_kw)
     model = _Model(params, effects, options)
     return _Loop(model).run()
+
+
+def _after_extremum(p: float, q: float, fp: float, fq: float) -> float:
+    """Root estimate of f on [p, q] when f'(p) = 0: f ~ fp + (fq - fp) ((t - p)/(q - p))^2.
+
+    The secant start is poor there (f is flat at p: Newton from it overshoots and
+    then creeps back, halving the error per step); the root of this parabola is not.
+    """
+    return p + (q - p) * math.sqrt(fp / (fp - fq))
+
+
+def _deflated(f, t0: float):
+    """``f(t) / (t - t0)`` with its derivative, for ``f`` returning (value, derivative)."""
+    def g(t):
+        fv, df = f(t)
+        tau = t - t0
+        if tau == 0.0:
+            return df, 0.0  # the limit; no slope: the root finder bisects
+        return fv / tau, (df - fv / tau) / tau
+    return g
 
 
 class _Loop:
@@ -258,71 +283,129 @@ class _Loop:
         ab = m.gs - m.mug * s
         F0 = m.mu * m.m2 * G_ACCEL * s
         C1, C2 = osc.coefficients(t0, x0, v0, F0)
+        lo_xv, zf, f_right, f_left, f_zero = self._flight_functions(osc, t0, C1, C2, F0, y0,
+                                                                    w0, ab, b)
 
-        def zf(t):
-            xx, vv, aa = osc.state(t, t0, C1, C2, F0)
-            tau = t - t0
-            return y0 + w0 * tau + 0.5 * ab * tau * tau - xx, w0 + ab * tau - vv, ab - aa
-
-        def f_right(t):
-            z, zd, _ = zf(t)
-            return z - b, zd
-
-        def f_left(t):
-            z, zd, _ = zf(t)
-            return z + b, zd
-
-        def f_zero(t):
-            _, zd, zdd = zf(t)
-            return zd, zdd
-
-        n = 64
-        B0, B1, _ = osc.window_basis(m.h, n)
+        n, h, t_end = _WINDOW, m.h, self.t_end
+        B01 = m.free_basis
+        # a flight that starts with z' = 0 (reversal, release, stuck impact) has a
+        # root of z' at t0 itself: its first interval is always examined, with that
+        # root deflated, so that a quick second reversal is not lost
+        rest = w0 == v0
         ta = t0
-        while ta < self.t_end:
+        while ta < t_end:
             cz = osc.window_coeffs(ta, t0, C1, C2, F0)
             tau = ta - t0
             cz = [-c for c in cz]
             cz[0] += y0 + w0 * tau + 0.5 * ab * tau * tau
             cz[1] += w0 + ab * tau
             cz[2] += 0.5 * ab
-            z = B0 @ cz
-            zd = B1 @ cz
+            zz = (B01 @ cz).tolist()
+            z, zd = zz[:n + 1], zz[n + 1:]
             # candidate intervals: a wall crossed, or an extremum of z inside
-            cand = (z[1:] >= b) | (z[1:] <= -b) | (zd[:-1] * zd[1:] < 0.0)
-            for k in np.flatnonzero(cand):
-                ev = self._interval(ta + k * m.h, ta + (k + 1) * m.h, float(z[k]),
-                                    float(z[k + 1]), float(zd[k]), float(zd[k + 1]),
-                                    t0, start_wall, friction, f_right, f_left, f_zero, zf)
+            for k in range(n):
+                zk = z[k + 1]
+                first = k == 0 and rest and ta == t0
+                if not (zk >= b or zk <= -b or zd[k] * zd[k + 1] < 0.0 or first):
+                    continue
+                ev = self._interval(ta + k * h, ta + (k + 1) * h, z[k], zk, zd[k], zd[k + 1],
+                                    t0, start_wall, friction, f_right, f_left, f_zero, zf,
+                                    first)
                 if ev is not None:
                     te, kind = ev
-                    if te >= self.t_end:
+                    if te >= t_end:
                         break
-                    return self._end_flight(te, kind, t0, C1, C2, F0, y0, w0, ab)
-            ta += n * m.h
-        return self._end_flight(self.t_end, "end", t0, C1, C2, F0, y0, w0, ab)
+                    return self._end_flight(te, kind, t0, C1, C2, F0, y0, w0, ab, lo_xv)
+            ta += n * h
+        return self._end_flight(self.t_end, "end", t0, C1, C2, F0, y0, w0, ab, lo_xv)
+
+    @staticmethod
+    def _flight_functions(osc, t0, C1, C2, F0, y0, w0, ab, b):
+        """LO state and event functions of a flight: z and its derivatives, closed form.
+
+        The same arithmetic as ``Oscillator.state`` (term by term, in the same
+        order, so the values are bit-identical), inlined with the per-flight
+        constants hoisted: these closures are the innermost loop of the simulator.
+        """
+        exp, sin, cos = math.exp, math.sin, math.cos
+        sg, wd, km = osc.sigma, osc.wd, osc.k / osc.m
+        nsg, m2sg = -sg, -2.0 * sg
+        cv1, cv2 = C2 * wd - sg * C1, C1 * wd + sg * C2
+        xs = F0 / osc.k
+        hab = 0.5 * ab
+        terms = [(w, w * w, pa, pb) for w, pa, pb in osc._terms]
+
+        def lo_xv(t):
+            x, v = xs, 0.0
+            for w, _, pa, pb in terms:
+                sn, cs = sin(w * t), cos(w * t)
+                x += pa * sn + pb * cs
+                v += w * (pa * cs - pb * sn)
+            tau = t - t0
+            e = exp(nsg * tau)
+            cs, sn = cos(wd * tau), sin(wd * tau)
+            return tau, x + e * (C1 * cs + C2 * sn), v + e * (cv1 * cs - cv2 * sn)
+
+        def zf(t):
+            x, v, a = xs, 0.0, 0.0
+            for w, ww, pa, pb in terms:
+                sn, cs = sin(w * t), cos(w * t)
+                x += pa * sn + pb * cs
+                v += w * (pa * cs - pb * sn)
+                a -= ww * (pa * sn + pb * cs)
+            tau = t - t0
+            e = exp(nsg * tau)
+            cs, sn = cos(wd * tau), sin(wd * tau)
+            xh = e * (C1 * cs + C2 * sn)
+            vh = e * (cv1 * cs - cv2 * sn)
+            ah = m2sg * vh - km * xh
+            return (y0 + w0 * tau + hab * tau * tau - (x + xh), w0 + ab * tau - (v + vh),
+                    ab - (a + ah))
+
+        def f_right(t):
+            tau, x, v = lo_xv(t)
+            return y0 + w0 * tau + hab * tau * tau - x - b, w0 + ab * tau - v
+
+        def f_left(t):
+            tau, x, v = lo_xv(t)
+            return y0 + w0 * tau + hab * tau * tau - x + b, w0 + ab * tau - v
+
+        def f_zero(t):
+            _, zd, zdd = zf(t)
+            return zd, zdd
+
+        return lo_xv, zf, f_right, f_left, f_zero
 
     def _interval(self, ta, tb, za, zb, zda, zdb, t0, start_wall, friction,
-                  f_right, f_left, f_zero, zf):
+                  f_right, f_left, f_zero, zf, rest=False):
         b = self.m.b
         pieces = [(ta, za, tb, zb, False)]
-        if zda * zdb < 0.0:
+        if rest:
+            # z'(t0) = 0: find a root of z'/(t - t0), which starts at z''(t0)
+            g0, g1 = zf(ta)[2], zdb / (tb - ta)
+            if g0 * g1 < 0.0:
+                te = bracketed_newton(_deflated(f_zero, ta), ta, tb, g0, g1)
+                ze = zf(te)[0]
+                pieces = [(ta, za, te, ze, True), (te, ze, tb, zb, False)]
+        elif zda * zdb < 0.0:
             te = bracketed_newton(f_zero, ta, tb, zda, zdb)
             ze = zf(te)[0]
             pieces = [(ta, za, te, ze, True), (te, ze, tb, zb, False)]
-        for (p, zp, q, zq, ends_at_extremum) in pieces:
+        for i, (p, zp, q, zq, ends_at_extremum) in enumerate(pieces):
             at_start = abs(p - t0) <= 1e-15 * max(1.0, abs(t0))
             if not (at_start and start_wall == RIGHT) and zp - b < 0.0 <= zq - b:
-                return bracketed_newton(f_right, p, q, zp - b, zq - b), RIGHT
+                x0 = _after_extremum(p, q, zp - b, zq - b) if i else None
+                return bracketed_newton(f_right, p, q, zp - b, zq - b, x0=x0), RIGHT
             if not (at_start and start_wall == LEFT) and zp + b > 0.0 >= zq + b:
-                return bracketed_newton(f_left, p, q, zp + b, zq + b), LEFT
+                x0 = _after_extremum(p, q, zp + b, zq + b) if i else None
+                return bracketed_newton(f_left, p, q, zp + b, zq + b, x0=x0), LEFT
             if ends_at_extremum and friction and q - t0 > 1e-12:
                 return q, "zero"
         return None
 
-    def _end_flight(self, te, kind, t0, C1, C2, F0, y0, w0, ab):
+    def _end_flight(self, te, kind, t0, C1, C2, F0, y0, w0, ab, lo_xv):
         m = self.m
-        x, v, _ = m.free.state(te, t0, C1, C2, F0)
+        _, x, v = lo_xv(te)  # = m.free.state(te, t0, C1, C2, F0)[:2], bit for bit
         tau = te - t0
         y = y0 + w0 * tau + 0.5 * ab * tau * tau
         w = w0 + ab * tau
