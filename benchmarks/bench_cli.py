@@ -7,8 +7,8 @@ Prints, side by side in one run, the start-up of `vidiscover --help`, of a bare
 from __future__ import annotations
 
 import argparse
-import platform
 import os
+import platform
 import shutil
 import statistics
 import subprocess

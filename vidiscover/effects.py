@@ -20,9 +20,10 @@ Examples
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from types import MappingProxyType
-from typing import Any, Callable, Mapping
+from typing import Any
 
 from .errors import InputError
 from .restitution_laws import RestitutionLaw
@@ -174,7 +175,7 @@ class Effects:
 
     # ------------------------------------------------------------------ parsing
     @classmethod
-    def parse(cls, items: "list[str] | tuple[str, ...]") -> "Effects":
+    def parse(cls, items: list[str] | tuple[str, ...]) -> Effects:
         """Build from CLI strings ``NAME``, ``NAME=v1,v2`` or ``NAME=k=v,k=v``."""
         active: dict[str, dict[str, Any]] = {}
         for item in items:
@@ -200,7 +201,7 @@ class Effects:
         return cls(active)
 
     @classmethod
-    def from_dict(cls, data: Mapping[str, Mapping[str, Any]]) -> "Effects":
+    def from_dict(cls, data: Mapping[str, Mapping[str, Any]]) -> Effects:
         """Inverse of :meth:`to_dict`."""
         return cls(dict(data))
 
@@ -208,13 +209,13 @@ class Effects:
         """JSON-ready ``{name: {param: value}}``."""
         return {k: dict(v) for k, v in self.active.items()}
 
-    def with_effect(self, name: str, **params: Any) -> "Effects":
+    def with_effect(self, name: str, **params: Any) -> Effects:
         """A copy with ``name`` switched on (or its parameters replaced)."""
         active = self.to_dict()
         active[name] = params
         return Effects(active)
 
-    def without(self, name: str) -> "Effects":
+    def without(self, name: str) -> Effects:
         """A copy with ``name`` switched off."""
         return Effects({k: v for k, v in self.to_dict().items() if k != name})
 

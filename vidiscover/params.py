@@ -113,7 +113,7 @@ class SystemParams:
         """Forcing period 1/f (s)."""
         return 1.0 / self.frequency
 
-    def replace(self, **changes: float) -> "SystemParams":
+    def replace(self, **changes: float) -> SystemParams:
         """Return a copy with some fields changed (validated again).
 
         Raises

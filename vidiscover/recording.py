@@ -9,8 +9,9 @@ A :class:`Recording` holds uniformly sampled ``t``, ``x`` (LO displacement, m),
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
-from typing import Any, Mapping
+from typing import Any
 
 import numpy as np
 
@@ -127,7 +128,7 @@ class Metadata:
 
     @classmethod
     def from_params(cls, p: SystemParams, sample_rate: float | None = None,
-                    **kw: Any) -> "Metadata":
+                    **kw: Any) -> Metadata:
         """Metadata describing parameters ``p``."""
         return cls(b=p.b, sample_rate=sample_rate, m1=p.m1, m2=p.m2, c1=p.c1, k1=p.k1,
                    excitation={"amplitude": p.amplitude, "frequency": p.frequency}, **kw)

@@ -69,12 +69,12 @@ class RestitutionLaw:
                              f"was {self.a!r}")
 
     @classmethod
-    def constant(cls, r: float) -> "RestitutionLaw":
+    def constant(cls, r: float) -> RestitutionLaw:
         """A speed-independent coefficient ``r``."""
         return cls("constant", r0=float(r))
 
     @classmethod
-    def parse(cls, spec: "str | float | RestitutionLaw") -> "RestitutionLaw":
+    def parse(cls, spec: str | float | RestitutionLaw) -> RestitutionLaw:
         """Parse ``"0.88"``, ``"constant:0.88"``, ``"linear:r0:a"`` or ``"power:a:p"``."""
         if isinstance(spec, RestitutionLaw):
             return spec

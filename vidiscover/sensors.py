@@ -69,7 +69,7 @@ class SensorConfig:
         if self.a_range is not None and not self.a_range > 0:
             raise InputError(f"a_range must be > 0 m/s^2 or None, was {self.a_range!r}")
 
-    def scaled_noise(self, factor: float) -> "SensorConfig":
+    def scaled_noise(self, factor: float) -> SensorConfig:
         """A copy with every noise level multiplied by ``factor``."""
         from dataclasses import replace
 

@@ -56,7 +56,7 @@ class ImpactTable:
     stuck: np.ndarray
 
     @classmethod
-    def from_rows(cls, rows: list[tuple]) -> "ImpactTable":
+    def from_rows(cls, rows: list[tuple]) -> ImpactTable:
         """Build from the loop's tuples."""
         names = [f for f in cls.__dataclass_fields__]
         if not rows:
@@ -80,7 +80,7 @@ class ImpactTable:
         """Impact speed |z'-| (m/s)."""
         return np.abs(self.u_minus)
 
-    def select(self, mask: np.ndarray) -> "ImpactTable":
+    def select(self, mask: np.ndarray) -> ImpactTable:
         """Rows where ``mask`` is true."""
         return ImpactTable(**{k: getattr(self, k)[mask] for k in self.__dataclass_fields__})
 
@@ -135,8 +135,8 @@ class SimulationResult:
     _model: object = field(repr=False)
 
     @classmethod
-    def from_loop(cls, model: "_Model", segs, impacts, sticks, status, message, n_events
-                  ) -> "SimulationResult":
+    def from_loop(cls, model: _Model, segs, impacts, sticks, status, message, n_events
+                  ) -> SimulationResult:
         """Assemble from the event loop's lists."""
         names = ("t0", "t1", "mode", "C1", "C2", "F0", "y0", "w0", "ab", "stuck")
         if segs:
