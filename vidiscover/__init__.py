@@ -16,6 +16,7 @@ import importlib
 __version__ = "0.1.0"
 
 _LAZY = {
+    "AnalysisResult": "analysis",
     "EFFECTS": "effects",
     "Effects": "effects",
     "InputError": "errors",
@@ -27,6 +28,7 @@ _LAZY = {
     "SimOptions": "simulation",
     "SimulationResult": "simulation",
     "SystemParams": "params",
+    "analyze": "analysis",
     "preset": "params",
     "record": "sensors",
     "simulate": "simulation",

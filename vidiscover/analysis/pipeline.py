@@ -1,0 +1,213 @@
+"""Stages 1-4 in one call: :func:`analyze` a recording, no figures, no files.
+
+>>> from vidiscover import preset, simulate, record, Effects
+>>> res = simulate(preset("paper", b=0.009),
+...                Effects.parse(["asymmetric_restitution=0.88,0.2"]), settle=3.0, duration=1.0)
+>>> out = analyze(record(res)[0])
+>>> s = out.summary()
+>>> s["impacts"]["n"] > 0, round(s["restitution"]["right"]["rms"], 2)
+(True, 0.88)
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from ..errors import InputError
+from .impacts import ImpactDetection, detect_impacts
+from .reconstruction import Reconstruction, reconstruct
+from .restitution import MU_TABLE, RestitutionEstimate, estimate_restitution, mu_table
+from .returnmap import FeatureContext, ReturnMap, compute_features, return_map
+from .signals import Forcing, check_recording, fit_forcing
+
+__all__ = ["AnalysisResult", "analyze"]
+
+
+def _clean(value):
+    """JSON-ready copy: numpy scalars to Python, NaN/inf to None."""
+    if isinstance(value, dict):
+        return {str(k): _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple)):
+        return [_clean(v) for v in value]
+    if isinstance(value, np.ndarray):
+        return [_clean(v) for v in value.tolist()]
+    if isinstance(value, (np.bool_, bool)):
+        return bool(value)
+    if isinstance(value, (np.integer,)):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        return v if math.isfinite(v) else None
+    return value
+
+
+@dataclass(frozen=True, eq=False)
+class AnalysisResult:
+    """Everything :func:`analyze` found in one recording.
+
+    Attributes
+    ----------
+    name : str
+        Recording label.
+    b : float
+        Half-clearance used (m).
+    mu : float
+        Friction coefficient assumed.
+    forcing : Forcing
+        Base excitation fitted to ``xe``.
+    detection : ImpactDetection
+        Stage 1.
+    reconstruction : Reconstruction
+        Stage 2.
+    restitution : RestitutionEstimate
+        Stage 3.
+    returnmap : ReturnMap
+        Stage 4.
+    features : dict
+        Registered features (:data:`vidiscover.analysis.returnmap.FEATURES`).
+    regime_label : str or None
+        Regime label (None until a classifier is attached).
+    warnings : tuple of str
+    """
+
+    name: str
+    b: float
+    mu: float
+    forcing: Forcing
+    detection: ImpactDetection
+    reconstruction: Reconstruction
+    restitution: RestitutionEstimate
+    returnmap: ReturnMap
+    features: dict
+    regime_label: str | None = None
+    warnings: tuple = ()
+    _recording: object = field(default=None, repr=False)
+
+    def summary(self) -> dict:
+        """JSON-ready nested dict (DESIGN.md section 6 ``analyze`` keys and more).
+
+        Keys: ``impacts`` {``n``, ``t``, ``side``, ``dv``, ``right``, ``left``,
+        ``noise``}, ``restitution`` {``mu``, ``right``/``left`` {``n``, ``rms``,
+        ``mean``, ``median``, ``std``, ``ci_low``, ``ci_high``, ...}}, ``regime``
+        {``label``}, ``flights`` {``n``, ``stick``}, ``forcing``, ``features``,
+        ``recording``, ``b``, ``mu``, ``warnings``. NaN becomes None.
+        """
+        det = self.detection
+        side = det.side
+        fc = self.reconstruction.flight_columns
+        return _clean({
+            "recording": self.name,
+            "b": self.b,
+            "mu": self.mu,
+            "duration": det.duration,
+            "sample_rate": det.sample_rate,
+            "forcing": {"frequency": self.forcing.frequency,
+                        "amplitude": self.forcing.amplitude,
+                        "phase": self.forcing.phase, "source": self.forcing.source},
+            "impacts": {"n": det.n, "t": det.t, "side": [str(s) for s in side],
+                        "dv": det.dv, "right": int((side == "right").sum()),
+                        "left": int((side == "left").sum()), "noise": det.noise,
+                        "unreliable": int((~det.columns["reliable"]).sum())},
+            "restitution": {"mu": self.restitution.mu,
+                            "confidence": self.restitution.confidence,
+                            "right": self.restitution.right.to_dict(),
+                            "left": self.restitution.left.to_dict()},
+            "flights": {"n": int(fc["t_start"].size),
+                        "stick": int((fc["kind"] == "stick").sum())},
+            "returnmap": {"n_points": self.returnmap.n_points,
+                          "clusters": self.returnmap.n_clusters},
+            "features": self.features,
+            "regime": {"label": self.regime_label},
+            "warnings": list(self.warnings),
+        })
+
+    def tables(self) -> dict[str, pd.DataFrame]:
+        """``{"impacts": ..., "flights": ...}`` DataFrames for CSV export.
+
+        The impact table joins stage 1 (pulse), stage 2 (states) and stage 3
+        (restitution) columns; the flight table is stage 2's.
+        """
+        return {"impacts": self.impact_table, "flights": self.reconstruction.flights}
+
+    @functools.cached_property
+    def impact_table(self) -> pd.DataFrame:
+        """One row per impact with the pulse, the states and r."""
+        d = self.detection.columns
+        s = self.reconstruction.impact_columns
+        r = self.restitution.columns
+        cols = {"t": d["t"], "side": d["side"], "dv": d["dv"], "area": d["area"],
+                "snr": d["snr"], "reliable": d["reliable"], "clipped": d["clipped"],
+                "dropout": d["dropout"], "side_check": d["side_check"]}
+        for k in ("x", "y", "v_minus", "v_plus", "w_minus", "w_plus", "u_minus", "u_plus"):
+            cols[k] = s[k]
+        cols.update({"r": r["r"], "r_status": r["status"], "r_used": r["used"],
+                     "r_rel_error": r["rel_error"]})
+        return pd.DataFrame(cols)
+
+    def mu_table(self, mus=MU_TABLE) -> pd.DataFrame:
+        """Paper Table 2 for this recording (see :func:`restitution.mu_table`)."""
+        if self._recording is None:
+            raise InputError("mu_table needs the recording; analyse it again with analyze()")
+        return mu_table(self.detection, self._recording, mus, b=self.b)
+
+
+def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 5.5,
+            n_boot: int = 1000, seed: int = 0) -> AnalysisResult:
+    """Run stages 1-4 on a recording: impacts, reconstruction, restitution, return map.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording.
+    mu : float
+        Friction coefficient assumed between ball and LO (paper eq. 8).
+    b : float, optional
+        Half-clearance (m); default ``rec.meta.b``.
+    threshold : float
+        Impact detection threshold (matched-filter SNR).
+    n_boot : int
+        Bootstrap resamples of the restitution confidence intervals.
+    seed : int
+        Seed of the bootstrap.
+
+    Returns
+    -------
+    AnalysisResult
+
+    Raises
+    ------
+    InputError
+        On unusable input (too short, bad time axis, no finite acceleration or
+        displacement, impossible parameters).
+    """
+    if not (isinstance(mu, (int, float)) and math.isfinite(mu) and 0 <= mu <= 2):
+        raise InputError(f"mu must be in [0, 2] (friction coefficient), was {mu!r}")
+    check_recording(rec)
+    b = float(rec.meta.b if b is None else b)
+    det = detect_impacts(rec, threshold=threshold, mu=mu, b=b)
+    recon = reconstruct(det, rec, b=b, mu=mu)
+    rest = estimate_restitution(recon, det, n_boot=n_boot, seed=seed)
+    forcing = fit_forcing(rec.t, rec.xe, rec.meta.frequency)
+    rm = return_map(det.t, det.side, forcing.period)
+    ctx = FeatureContext(t=det.t, side=det.side, dv=det.dv, t_start=float(rec.t[0]),
+                         t_end=float(rec.t[-1]) + 1.0 / det.sample_rate, forcing=forcing,
+                         ts=recon.t, x=recon.x, returnmap=rm)
+    features = compute_features(ctx)
+    warnings = list(det.warnings)
+    if forcing.source != "xe":
+        warnings.append("base displacement 'xe' has no usable sine: cycles are cut with the "
+                        "metadata frequency and phase 0")
+    for w in (rest.right, rest.left):
+        if w.warn_slow:
+            warnings.append(f"{w.side} wall: the ball is too slow for the friction "
+                            f"correction (median ratio {w.friction_ratio:.2f}); r depends "
+                            "more on mu than on the data")
+    return AnalysisResult(name=rec.name, b=b, mu=float(mu), forcing=forcing, detection=det,
+                          reconstruction=recon, restitution=rest, returnmap=rm,
+                          features=features, regime_label=None, warnings=tuple(warnings),
+                          _recording=rec)

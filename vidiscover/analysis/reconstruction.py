@@ -1,0 +1,505 @@
+"""Stage 2: LO velocity, ball position and ball flights (paper Sec. 4-5, Figs. 7, 12-14).
+
+**LO motion.** The pulse-free acceleration of stage 1 is integrated twice and the
+impact velocity jumps (pulse areas) are added as exact steps; the integration
+drift (accelerometer noise and bias, unknown initial velocity) is pinned to the
+laser displacement by a local quadratic smoother of ``x_laser - x_integrated`` over
+``drift_window`` seconds (a complementary filter: slow content from the laser, fast
+content from the accelerometer). This gives the LO displacement ``x`` and velocity
+``v`` with sharp jumps at the impacts (paper Fig. 13, "smooth curve"), free of the
+laser's sheet resonance; ``v_disp`` is the laser derivative (the paper's
+"nonsmooth curve"). Pre/post-impact velocities: ``v_minus`` from the integral,
+``v_plus = v_minus + dv``.
+
+**Ball.** At an impact on the wall of sign s (+1 right, -1 left) the ball is at
+``y = x + s b`` (eq. 5). Between consecutive impacts it flies:
+
+* without friction (``mu = 0``) in a straight line (eq. 6);
+* with friction by :func:`~vidiscover.analysis.friction.solve_flights` (eq. 8
+  generalised: z' may change sign, the ball may stick to the LO and slide again).
+
+**Sticking after chatter.** A weak wall (r ~ 0.2) makes the ball chatter: the
+re-impacts shrink geometrically and the last ones are too weak to be seen (see
+:mod:`~vidiscover.analysis.validation`); the ball then rides the wall until the LO
+acceleration lets it go (left wall: until x'' < -mu g; right wall: until
+x'' > mu g) and leaves it with the wall's velocity. A straight line from the last
+*seen* re-impact would be wrong. For every flight between opposite walls whose
+start wall can hold the ball, the *stick-then-fly* hypothesis is tested: the ball
+leaves at the release time with the LO velocity and must arrive within
+``stick_tol`` of the measured next impact position. If it does, the flight is of
+kind ``"stick"`` (ball on the wall until ``t_release``, then free); otherwise
+``"free"``. The rebound of the impact starting a ``"stick"`` flight is not
+observable (its r is left undefined by stage 3).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from ..errors import InputError
+from ..params import G_ACCEL
+from ._table import check_columns, to_frame
+from .friction import integrate_flights, solve_flights
+from .impacts import ImpactDetection
+from .signals import fill_gaps, robust_std
+
+__all__ = ["Reconstruction", "reconstruct", "FLIGHT_COLUMNS", "IMPACT_STATE_COLUMNS"]
+
+#: Columns of :attr:`Reconstruction.flights`.
+FLIGHT_COLUMNS = ("i_start", "i_end", "t_start", "t_end", "duration", "side_start",
+                  "side_end", "kind", "t_release", "y_start", "y_end", "x_start", "x_end",
+                  "v_start", "v_end", "w_start", "w_end", "w_mean", "zd_start", "zd_end",
+                  "penetration", "closure", "sign_changes", "y_release")
+#: Columns of :attr:`Reconstruction.impacts`.
+IMPACT_STATE_COLUMNS = ("t", "side", "x", "y", "v_minus", "v_plus", "dv", "w_minus",
+                        "w_plus", "u_minus", "u_plus", "flight_in", "flight_out")
+
+_BLOCK = 16                 # samples per block of the drift smoother
+_PEN_STEP = 4               # wall penetration is checked every _PEN_STEP samples
+
+
+@dataclass(frozen=True, eq=False)
+class Reconstruction:
+    """Reconstructed LO and ball motion (stage 2 result).
+
+    Attributes
+    ----------
+    t : ndarray
+        Sample times (s).
+    x : ndarray
+        LO displacement from the drift-corrected integrated acceleration (m).
+    v : ndarray
+        LO velocity from the drift-corrected integrated acceleration (m/s); at an
+        impact sample it is the value after all earlier jumps.
+    v_disp : ndarray
+        LO velocity from differentiating the laser displacement (m/s).
+    impact_columns : Mapping[str, ndarray]
+        Per impact, keys :data:`IMPACT_STATE_COLUMNS`: LO displacement ``x``, ball
+        position ``y``, LO velocities ``v_minus``/``v_plus``, ball velocities
+        ``w_minus``/``w_plus`` (end of the incoming / start of the outgoing flight),
+        relative velocities ``u = w - v`` and the flight indices (-1: none).
+        DataFrame: :attr:`impacts`.
+    flight_columns : Mapping[str, ndarray]
+        One entry per pair of consecutive impacts, keys :data:`FLIGHT_COLUMNS`
+        (``kind`` "free" or "stick"; ``penetration``: how far the reconstructed ball
+        goes through a wall, m; ``closure``: arrival error of the stick-then-fly
+        hypothesis, m, NaN when not a candidate; velocities in m/s).
+        DataFrame: :attr:`flights`.
+    b : float
+        Half-clearance used (m).
+    mu : float
+        Friction coefficient assumed.
+    position_noise : float
+        Robust RMS of laser minus reconstructed LO displacement (m), the ball
+        position uncertainty used by stage 3.
+    """
+
+    t: np.ndarray = field(repr=False)
+    x: np.ndarray = field(repr=False)
+    v: np.ndarray = field(repr=False)
+    v_disp: np.ndarray = field(repr=False)
+    impact_columns: Mapping[str, np.ndarray] = field(repr=False)
+    flight_columns: Mapping[str, np.ndarray] = field(repr=False)
+    b: float
+    mu: float
+    position_noise: float
+    _traj: dict = field(default_factory=dict, repr=False)
+
+    def __post_init__(self) -> None:
+        for name in ("x", "v", "v_disp"):
+            if getattr(self, name).shape != self.t.shape:
+                raise ValueError(f"{name} must have the shape of t {self.t.shape}, "
+                                 f"has {getattr(self, name).shape}")
+        check_columns(self.impact_columns, IMPACT_STATE_COLUMNS, "Reconstruction impacts")
+        check_columns(self.flight_columns, FLIGHT_COLUMNS, "Reconstruction flights")
+
+    @functools.cached_property
+    def impacts(self) -> pd.DataFrame:
+        """Per-impact states as a DataFrame (columns :data:`IMPACT_STATE_COLUMNS`)."""
+        return to_frame(self.impact_columns, IMPACT_STATE_COLUMNS)
+
+    @functools.cached_property
+    def flights(self) -> pd.DataFrame:
+        """Flight segments as a DataFrame (columns :data:`FLIGHT_COLUMNS`)."""
+        return to_frame(self.flight_columns, FLIGHT_COLUMNS)
+
+    @property
+    def n_flights(self) -> int:
+        """Number of flight segments."""
+        return int(self.flight_columns["t_start"].size)
+
+    def ball_position(self, t) -> np.ndarray:
+        """Reconstructed ball position at times ``t`` (m); NaN outside the flights."""
+        return self._ball(t)[0]
+
+    def ball_velocity(self, t) -> np.ndarray:
+        """Reconstructed ball velocity at times ``t`` (m/s); NaN outside the flights."""
+        return self._ball(t)[1]
+
+    def _ball(self, t):
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        y = np.full(t.shape, np.nan)
+        w = np.full(t.shape, np.nan)
+        fl = self.flight_columns
+        nf = self.n_flights
+        if nf == 0:
+            return y, w
+        ts, te = fl["t_start"], fl["t_end"]
+        k = np.searchsorted(ts, t, side="right") - 1
+        inside = (k >= 0) & (t <= te[np.clip(k, 0, None)])
+        k = np.clip(k, 0, nf - 1)
+        tr = fl["t_release"][k]
+        side = np.where(fl["side_start"][k] == "right", 1.0, -1.0)
+        on_wall = inside & (t < tr)
+        if on_wall.any():
+            y[on_wall] = np.interp(t[on_wall], self.t, self.x) + side[on_wall] * self.b
+            w[on_wall] = np.interp(t[on_wall], self.t, self.v)
+        free = inside & ~on_wall
+        kk = k[free]
+        tt = t[free]
+        if self._traj:
+            T, Y, Wt = self._traj["t"], self._traj["y"], self._traj["w"]
+            Tr = T[kk]
+            pos = np.clip((tt - Tr[:, 0]) / (Tr[:, -1] - Tr[:, 0]) * (T.shape[1] - 1),
+                          0, T.shape[1] - 1 - 1e-9)
+            i0 = pos.astype(int)
+            f = pos - i0
+            y[free] = Y[kk, i0] * (1 - f) + Y[kk, i0 + 1] * f
+            w[free] = Wt[kk, i0] * (1 - f) + Wt[kk, i0 + 1] * f
+        else:
+            slope = fl["w_end"][kk]
+            y[free] = fl["y_release"][kk] + slope * (tt - fl["t_release"][kk])
+            w[free] = slope
+        return y, w
+
+
+def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0.0, *,
+                drift_window: float = 0.1, stick_tol: float | None = None
+                ) -> Reconstruction:
+    """Reconstruct the LO velocity and the ball motion from detected impacts.
+
+    Parameters
+    ----------
+    det : ImpactDetection
+        Stage 1 result for ``rec``.
+    rec : Recording
+        The recording (its laser displacement pins the integration drift).
+    b : float, optional
+        Half-clearance (m); default ``rec.meta.b``.
+    mu : float
+        Friction coefficient assumed between ball and LO (paper eq. 8).
+    drift_window : float
+        Window of the drift smoother (s).
+    stick_tol : float, optional
+        Largest arrival error (m) of the stick-then-fly hypothesis; default
+        ``max(2e-5, 0.01 * b)``.
+
+    Returns
+    -------
+    Reconstruction
+
+    Raises
+    ------
+    InputError
+        If ``b``, ``mu`` or ``drift_window`` are out of range.
+    """
+    b = float(rec.meta.b if b is None else b)
+    if not (math.isfinite(b) and b > 0):
+        raise InputError(f"b must be > 0 m (half-clearance), was {b!r}")
+    if not (math.isfinite(mu) and 0 <= mu <= 2):
+        raise InputError(f"mu must be in [0, 2] (friction coefficient), was {mu!r}")
+    if not (math.isfinite(drift_window) and drift_window > 0):
+        raise InputError(f"drift_window must be > 0 s, was {drift_window!r}")
+    stick_tol = max(2e-5, 0.01 * b) if stick_tol is None else float(stick_tol)
+    fs = det.sample_rate
+    t = np.asarray(rec.t, dtype=float)
+    n = t.size
+    tr = t - t[0]
+    t_imp = det.t
+    dv = det.dv
+    side = det.sign.astype(float)
+
+    # ---- LO motion: integrate the pulse-free acceleration, add the jumps exactly
+    a = det.a_smooth
+    dt = 1.0 / fs
+    V_s = np.empty(n)
+    V_s[0] = 0.0
+    np.cumsum(0.5 * (a[1:] + a[:-1]) * dt, out=V_s[1:])
+    X_s = np.empty(n)
+    X_s[0] = 0.0
+    np.cumsum(0.5 * (V_s[1:] + V_s[:-1]) * dt, out=X_s[1:])
+    ti = t_imp - t[0]
+    cdv = np.concatenate([[0.0], np.cumsum(dv)])
+    cdvt = np.concatenate([[0.0], np.cumsum(dv * ti)])
+    # jumps of the impacts strictly before each sample, as running sums
+    first = np.minimum(np.floor(ti * fs).astype(np.int64) + 1, n)
+    first += (first < n) & (first > 0) & (tr[np.clip(first - 1, 0, n - 1)] > ti)
+    S = np.cumsum(np.bincount(first, weights=dv, minlength=n + 1)[:n])
+    SdT = np.cumsum(np.bincount(first, weights=dv * ti, minlength=n + 1)[:n])
+    X_raw = X_s + S * tr - SdT
+    xl = np.asarray(rec.x, dtype=float)
+    okx = np.isfinite(xl)
+    if not okx.any():
+        raise InputError(f"{rec.name}: column 'x' has no finite value; the laser "
+                         "displacement is needed to reconstruct the motion")
+    e = np.where(okx, xl - X_raw, 0.0)
+    D, Dd = _drift(tr, e, okx, fs, drift_window)
+    x_f = X_raw + D
+    v_f = V_s + S + Dd
+    xl_f = fill_gaps(xl, ~okx) if not okx.all() else xl
+    v_disp = np.gradient(xl_f, dt)
+    resid = (xl - x_f)[okx]
+    position_noise = max(robust_std(resid[:: max(1, resid.size // 8192)]), 1e-9)
+
+    # ---- states at the impacts
+    k = np.clip(np.searchsorted(tr, ti, side="right") - 1, 0, n - 2)
+    f = (ti - tr[k]) * fs
+    lin = lambda arr: arr[k] * (1 - f) + arr[k + 1] * f          # noqa: E731
+    before = cdv[:-1]                                          # jumps strictly before
+    x_imp = lin(X_s) + before * ti - cdvt[:-1] + lin(D)
+    v_minus = lin(V_s) + before + lin(Dd)
+    v_plus = v_minus + dv
+    y_imp = x_imp + side * b
+
+    def lo_velocity(tq):
+        return np.interp(tq - t[0], tr, V_s + Dd) + cdv[np.searchsorted(ti, tq - t[0])]
+
+    def lo_acc(tq):
+        return np.interp(tq - t[0], tr, det.baseline)
+
+    flights, traj = _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f,
+                             det.baseline, fs, stick_tol, lo_velocity, lo_acc)
+    m = t_imp.size
+    w_minus = np.full(m, np.nan)
+    w_plus = np.full(m, np.nan)
+    f_in = np.full(m, -1, dtype=np.int64)
+    f_out = np.full(m, -1, dtype=np.int64)
+    nf = flights["t_start"].size
+    if nf:
+        i_s, i_e = flights["i_start"], flights["i_end"]
+        w_plus[i_s] = flights["w_start"]
+        w_minus[i_e] = flights["w_end"]
+        f_out[i_s] = np.arange(nf)
+        f_in[i_e] = np.arange(nf)
+    impacts = {
+        "t": t_imp, "side": det.side, "x": x_imp, "y": y_imp, "v_minus": v_minus,
+        "v_plus": v_plus, "dv": dv, "w_minus": w_minus, "w_plus": w_plus,
+        "u_minus": w_minus - v_minus, "u_plus": w_plus - v_plus,
+        "flight_in": f_in, "flight_out": f_out}
+    return Reconstruction(t=t, x=x_f, v=v_f, v_disp=v_disp, impact_columns=impacts,
+                          flight_columns=flights, b=b, mu=float(mu),
+                          position_noise=float(position_noise), _traj=traj)
+
+
+def _drift(tr, e, ok, fs, window):
+    """Slow drift D (m) and its derivative (m/s) of the residual ``e``, by a local
+    quadratic (Savitzky-Golay) smoother of block means.
+    """
+    n = tr.size
+    B = _BLOCK if n >= 8 * _BLOCK else 1
+    nb = n // B
+    cut = nb * B
+    eb = (e[:cut] * ok[:cut]).reshape(nb, B).sum(axis=1)
+    cb = ok[:cut].reshape(nb, B).sum(axis=1)
+    tb = tr[:cut].reshape(nb, B).mean(axis=1)
+    if cut < n:                                  # the tail as one more block
+        eb = np.append(eb, (e[cut:] * ok[cut:]).sum())
+        cb = np.append(cb, ok[cut:].sum())
+        tb = np.append(tb, tr[cut:].mean())
+    good = cb > 0
+    mean = np.where(good, eb / np.maximum(cb, 1), 0.0)
+    if not good.all():
+        mean = fill_gaps(mean, ~good)
+    h = B / fs
+    win = int(round(window / h)) | 1
+    win = max(5, min(win, mean.size if mean.size % 2 else mean.size - 1))
+    if mean.size < 5:
+        c = np.polyfit(tb, mean, min(1, mean.size - 1)) if mean.size > 1 else np.r_[mean]
+        D = np.polyval(c, tr)
+        Dd = np.polyval(np.polyder(c), tr) if c.size > 1 else np.zeros(n)
+        return D, Dd
+    Db, Ddb = _quadratic_smoother(mean, win, h)
+    D = np.interp(tr, tb, Db)
+    Dd = np.interp(tr, tb, Ddb)
+    # beyond the first/last block centre: extrapolate along the local slope
+    for sel, k in ((tr < tb[0], 0), (tr > tb[-1], -1)):
+        D[sel] = Db[k] + Ddb[k] * (tr[sel] - tb[k])
+    return D, Dd
+
+
+@functools.lru_cache(maxsize=8)
+def _quadratic_taps(win: int, h: float):
+    from scipy.signal import savgol_coeffs
+
+    c0 = savgol_coeffs(win, 2, use="dot")
+    c1 = savgol_coeffs(win, 2, deriv=1, delta=h, use="dot")
+    j = np.arange(win, dtype=float) - win // 2
+    P = np.linalg.pinv(np.vander(j, 3, increasing=True))   # coefficients of the quadratic
+    return c0, c1, P
+
+
+def _quadratic_smoother(y, win, h):
+    """Local quadratic fit value and derivative (edge windows fitted as a whole)."""
+    from scipy.ndimage import correlate1d
+
+    half = win // 2
+    c0, c1, P = _quadratic_taps(win, h)
+    val = correlate1d(y, c0, mode="nearest")
+    der = correlate1d(y, c1, mode="nearest")
+    j = np.arange(win, dtype=float) - half
+    for sl, jj in ((slice(0, half), j[:half]), (slice(y.size - half, y.size), j[-half:])):
+        seg = y[:win] if sl.start == 0 else y[-win:]
+        c = P @ seg
+        val[sl] = c[0] + c[1] * jj + c[2] * jj ** 2
+        der[sl] = (c[1] + 2 * c[2] * jj) / h
+    return val, der
+
+
+def _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f, acc, fs,
+             stick_tol, lo_velocity, lo_acc):
+    """Flight table between consecutive impacts (see the module docs)."""
+    m = t_imp.size
+    nf = max(m - 1, 0)
+    if nf == 0:
+        cols = {c: np.zeros(0) for c in FLIGHT_COLUMNS}
+        for c in ("i_start", "i_end", "sign_changes"):
+            cols[c] = np.zeros(0, dtype=np.int64)
+        for c in ("side_start", "side_end", "kind"):
+            cols[c] = np.zeros(0, dtype="<U5")
+        return cols, {}
+    i_s = np.arange(nf)
+    i_e = i_s + 1
+    ts, te = t_imp[:-1], t_imp[1:]
+    dur = te - ts
+    ss, se = side[:-1], side[1:]
+    ys, ye = y_imp[:-1], y_imp[1:]
+    w_mean = (ye - ys) / dur
+    mug = mu * G_ACCEL
+
+    # ---- stick-then-fly candidates: opposite walls, start wall holds the ball at t_s+
+    t0 = t[0]
+    cs = np.clip(np.searchsorted(t, ts, side="right"), 0, t.size - 1)
+    ce = np.clip(np.searchsorted(t, te, side="left") - 1, 0, t.size - 1)
+    a_start = acc[cs]
+    holds0 = np.where(ss < 0, a_start > -mug, a_start < mug)
+    cand = (ss != se) & holds0 & (ce > cs)
+    t_rel = ts.copy()
+    found = np.zeros(nf, dtype=bool)
+    if cand.any():
+        # first sample after t_s where the wall lets go: left x'' < -mu g, right x'' > mu g
+        rel_left = np.flatnonzero(acc < -mug)
+        rel_right = np.flatnonzero(acc > mug)
+        for sgn, rel in ((-1.0, rel_left), (1.0, rel_right)):
+            sel = np.flatnonzero(cand & (ss == sgn))
+            if sel.size == 0 or rel.size == 0:
+                continue
+            j = np.searchsorted(rel, cs[sel])
+            okj = j < rel.size
+            kk = np.where(okj, rel[np.minimum(j, rel.size - 1)], t.size)
+            inside = okj & (kk <= ce[sel]) & (kk > 0)
+            kk = np.clip(kk, 1, t.size - 1)
+            thr = -mug if sgn < 0 else mug
+            a0, a1 = acc[kk - 1], acc[kk]
+            with np.errstate(divide="ignore", invalid="ignore"):
+                fr = np.clip(np.where(a1 != a0, (thr - a0) / (a1 - a0), 0.0), 0.0, 1.0)
+            trel = t[kk - 1] + fr / fs
+            trel = np.maximum(trel, ts[sel])
+            t_rel[sel] = np.where(inside, trel, ts[sel])
+            found[sel] = inside
+    cand &= found
+    x_rel = np.interp(t_rel - t0, t - t0, x_f)
+    v_rel = lo_velocity(t_rel)
+    y_rel = x_rel + ss * b
+
+    traj = {}
+    if mu == 0.0:
+        closure = np.where(cand, y_rel + v_rel * (te - t_rel) - ye, np.nan)
+        stick = cand & (np.abs(closure) <= stick_tol)
+        t_free = np.where(stick, t_rel, ts)
+        y_free = np.where(stick, y_rel, ys)
+        w_free = (ye - y_free) / (te - t_free)
+        w_start = np.where(stick, np.nan, w_free)
+        w_end = w_free
+        changes = np.zeros(nf, dtype=np.int64)
+        y_release = y_free
+    else:
+        # free hypothesis for every flight, stick hypothesis for the candidates
+        sol = solve_flights(ts, te, ys, ye, lo_velocity, lo_acc, mu, v_start=v_plus[:-1],
+                            v_end=v_minus[1:])
+        closure = np.full(nf, np.nan)
+        stick = np.zeros(nf, dtype=bool)
+        if cand.any():
+            ci = np.flatnonzero(cand)
+            solc = solve_flights(t_rel[ci], te[ci], y_rel[ci], ye[ci], lo_velocity, lo_acc,
+                                 mu, v_start=v_rel[ci], v_end=v_minus[1:][ci])
+            # arrival error when launched with the wall's velocity at the release
+            y_end, _ = integrate_flights(t_rel[ci], te[ci], y_rel[ci], v_rel[ci], lo_velocity,
+                                         lo_acc, mu, v_start=v_rel[ci],
+                                         v_end=v_minus[1:][ci])
+            closure[ci] = y_end - ye[ci]
+            stick[ci] = np.abs(closure[ci]) <= stick_tol
+        w_start = sol.w_start.copy()
+        w_end = sol.w_end.copy()
+        changes = sol.sign_changes.copy()
+        T, Y, W = sol.t.copy(), sol.y.copy(), sol.w.copy()
+        if stick.any():
+            si = np.flatnonzero(stick)
+            pos = np.searchsorted(np.flatnonzero(cand), si)
+            w_start[si] = np.nan
+            w_end[si] = solc.w_end[pos]
+            changes[si] = solc.sign_changes[pos]
+            T[si], Y[si], W[si] = solc.t[pos], solc.y[pos], solc.w[pos]
+        y_release = np.where(stick, y_rel, ys)
+        traj = {"t": T, "y": Y, "w": W, "row": np.arange(nf)}
+    t_release = np.where(stick, t_rel, ts)
+
+    # ---- penetration of the reconstructed ball path through the walls
+    pen = _penetration(t, x_f, ts, te, t_release, y_release, w_end, ss, b, traj, mu,
+                       w_start, ys)
+    return {
+        "i_start": i_s, "i_end": i_e, "t_start": ts, "t_end": te, "duration": dur,
+        "side_start": np.where(ss > 0, "right", "left"),
+        "side_end": np.where(se > 0, "right", "left"),
+        "kind": np.where(stick, "stick", "free"),
+        "t_release": t_release, "y_start": ys, "y_end": ye, "x_start": x_imp[:-1],
+        "x_end": x_imp[1:], "v_start": v_plus[:-1], "v_end": v_minus[1:],
+        "w_start": w_start, "w_end": w_end, "w_mean": w_mean,
+        "zd_start": w_start - v_plus[:-1], "zd_end": w_end - v_minus[1:],
+        "penetration": pen, "closure": closure, "sign_changes": changes,
+        "y_release": y_release}, traj
+
+
+def _penetration(t, x_f, ts, te, t_release, y_release, w_line, ss, b, traj, mu, w_start, ys):
+    """Largest excursion (m) of the reconstructed ball beyond the walls, per flight."""
+    nf = ts.size
+    step = _PEN_STEP
+    td = t[::step]
+    k0 = np.searchsorted(td, ts, side="right")
+    k1 = np.searchsorted(td, te, side="left")
+    cnt = np.maximum(k1 - k0, 0)
+    out = np.zeros(nf)
+    if cnt.sum() == 0:
+        return out
+    fl = np.repeat(np.arange(nf), cnt)
+    idx = (np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt) + np.repeat(k0, cnt)) * step
+    tt = t[idx]
+    if mu == 0.0:
+        tr = t_release[fl]
+        y = np.where(tt < tr, x_f[idx] + ss[fl] * b, y_release[fl] + w_line[fl] * (tt - tr))
+    else:
+        T, Y = traj["t"], traj["y"]
+        pos = (tt - T[fl, 0]) / (T[fl, -1] - T[fl, 0]) * (T.shape[1] - 1)
+        pos = np.clip(pos, 0, T.shape[1] - 1 - 1e-9)
+        i0 = pos.astype(int)
+        f = pos - i0
+        y = Y[fl, i0] * (1 - f) + Y[fl, i0 + 1] * f
+    z = y - x_f[idx]
+    exc = np.maximum(np.abs(z) - b, 0.0)
+    np.maximum.at(out, fl, exc)
+    return out

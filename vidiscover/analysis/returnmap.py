@@ -1,0 +1,352 @@
+"""Stage 4: first return map of impact time differences and per-recording features.
+
+The first return map (paper Sec. 4, Fig. 5) plots consecutive impact time
+differences ``(dt_i, dt_{i+1})`` with ``dt_i = t_{i+1} - t_i``: a periodic regime
+is a few points (two asymmetric impacts per cycle: two points mirrored about the
+diagonal), a quasi-periodic one a closed curve, an irregular one a cloud.
+
+Features are registered in :data:`FEATURES` (name -> function of a
+:class:`FeatureContext`), so the classifier and the tests iterate over one
+registry; add one with :func:`register_feature`. Every feature returns a float;
+NaN means "undefined for this record" (e.g. no impacts).
+
+Examples
+--------
+>>> import numpy as np
+>>> rm = return_map(np.arange(10) * 0.0625, np.array(["right", "left"] * 5), 0.125)
+>>> rm.n_points, rm.n_clusters
+(8, 1)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import numpy as np
+import pandas as pd
+
+from .signals import Forcing
+
+__all__ = ["ReturnMap", "return_map", "FeatureContext", "FEATURES", "register_feature",
+           "compute_features"]
+
+
+@dataclass(frozen=True, eq=False)
+class ReturnMap:
+    """First return map of impact time differences.
+
+    Attributes
+    ----------
+    dt : ndarray
+        Time differences ``dt_i = t_{i+1} - t_i`` (s), n - 1 values.
+    x, y : ndarray
+        Points ``(dt_i, dt_{i+1})`` (s), n - 2 values.
+    side : ndarray of str
+        Wall of the impact between the two intervals of each point.
+    cluster : ndarray of int
+        Cluster of each point (single linkage at ``radius * period``).
+    centres : ndarray
+        Cluster centres, shape (k, 2) (s).
+    period : float
+        Forcing period (s).
+    radius : float
+        Cluster radius as a fraction of the period.
+    """
+
+    dt: np.ndarray = field(repr=False)
+    x: np.ndarray = field(repr=False)
+    y: np.ndarray = field(repr=False)
+    side: np.ndarray = field(repr=False)
+    cluster: np.ndarray = field(repr=False)
+    centres: np.ndarray = field(repr=False)
+    period: float
+    radius: float
+
+    @property
+    def n_points(self) -> int:
+        """Number of return-map points."""
+        return int(self.x.size)
+
+    @property
+    def n_clusters(self) -> int:
+        """Number of clusters."""
+        return int(self.centres.shape[0])
+
+    def to_frame(self) -> pd.DataFrame:
+        """Points as a DataFrame: ``dt_i``, ``dt_next``, ``side``, ``cluster``."""
+        return pd.DataFrame({"dt_i": self.x, "dt_next": self.y, "side": self.side,
+                             "cluster": self.cluster})
+
+
+def return_map(t: np.ndarray, side: np.ndarray, period: float, radius: float = 0.02
+               ) -> ReturnMap:
+    """Build the first return map of impact times ``t`` (sorted, s).
+
+    Parameters
+    ----------
+    t : ndarray
+        Impact times (s).
+    side : ndarray of str
+        Impact sides.
+    period : float
+        Forcing period (s), the scale of the clustering.
+    radius : float
+        Cluster radius as a fraction of the period.
+
+    Returns
+    -------
+    ReturnMap
+    """
+    t = np.asarray(t, dtype=float)
+    side = np.asarray(side)
+    dt = np.diff(t) if t.size > 1 else np.zeros(0)
+    x, y = dt[:-1], dt[1:]
+    s = side[1:-1] if t.size > 2 else np.zeros(0, dtype=side.dtype if side.size else "<U5")
+    cluster, centres = _linkage_clusters(np.column_stack([x, y]), radius * period)
+    return ReturnMap(dt=dt, x=x, y=y, side=s, cluster=cluster, centres=centres,
+                     period=float(period), radius=float(radius))
+
+
+def _linkage_clusters(points: np.ndarray, radius: float):
+    """Single-linkage clusters (points closer than ``radius`` chain together) and
+    their centres; above 2000 points, cells of size ``radius`` instead.
+    """
+    n = points.shape[0]
+    if n == 0:
+        return np.zeros(0, dtype=np.int64), np.zeros((0, 2))
+    if n == 1:
+        return np.zeros(1, dtype=np.int64), points.copy()
+    if n <= 2000 and radius > 0:
+        from scipy.cluster.hierarchy import fcluster, linkage
+
+        labels = fcluster(linkage(points, method="single"), radius, criterion="distance") - 1
+    else:
+        cells = np.floor(points / max(radius, 1e-300)).astype(np.int64)
+        labels = np.unique(cells, axis=0, return_inverse=True)[1].ravel()
+    labels = labels.astype(np.int64)
+    k = int(labels.max()) + 1
+    counts = np.bincount(labels, minlength=k)
+    centres = np.column_stack([np.bincount(labels, points[:, 0], k) / counts,
+                               np.bincount(labels, points[:, 1], k) / counts])
+    return labels, centres
+
+
+@dataclass(frozen=True, eq=False)
+class FeatureContext:
+    """What the feature functions see.
+
+    Attributes
+    ----------
+    t, side, dv : ndarray
+        Impact times (s), sides ("right"/"left") and LO velocity jumps (m/s).
+    t_start, t_end : float
+        Span of the record (s).
+    forcing : Forcing
+        Fitted base excitation (cycle cuts at base phase 0).
+    ts, x : ndarray
+        Sample times (s) and LO displacement (m).
+    returnmap : ReturnMap
+    """
+
+    t: np.ndarray = field(repr=False)
+    side: np.ndarray = field(repr=False)
+    dv: np.ndarray = field(repr=False)
+    t_start: float
+    t_end: float
+    forcing: Forcing
+    ts: np.ndarray = field(repr=False)
+    x: np.ndarray = field(repr=False)
+    returnmap: ReturnMap
+
+    @property
+    def period(self) -> float:
+        """Forcing period (s)."""
+        return self.forcing.period
+
+    def cycles(self) -> np.ndarray:
+        """Start times of the complete cycles plus the end of the last one."""
+        return self.forcing.cycle_starts(self.t_start, self.t_end)
+
+    def counts(self) -> np.ndarray:
+        """Impacts per complete cycle."""
+        c = self.cycles()
+        if c.size < 2:
+            return np.zeros(0, dtype=np.int64)
+        return np.histogram(self.t, bins=c)[0]
+
+
+#: Feature registry: name -> function(FeatureContext) -> float.
+FEATURES: dict[str, Callable[[FeatureContext], float]] = {}
+
+
+def register_feature(name: str):
+    """Decorator adding a feature function to :data:`FEATURES` under ``name``."""
+    def deco(func: Callable[[FeatureContext], float]):
+        if name in FEATURES:
+            raise ValueError(f"feature {name!r} is already registered")
+        FEATURES[name] = func
+        return func
+    return deco
+
+
+def compute_features(ctx: FeatureContext, names=None) -> dict[str, float]:
+    """Evaluate the registered features (all, or ``names``) on ``ctx``."""
+    names = list(FEATURES) if names is None else list(names)
+    return {n: float(FEATURES[n](ctx)) for n in names}
+
+
+_NAN = float("nan")
+
+
+@register_feature("n_impacts")
+def _n_impacts(ctx: FeatureContext) -> float:
+    """Number of detected impacts."""
+    return float(ctx.t.size)
+
+
+@register_feature("impacts_per_cycle")
+def _ipc(ctx: FeatureContext) -> float:
+    """Mean impacts per complete forcing cycle."""
+    c = ctx.counts()
+    return float(c.mean()) if c.size else _NAN
+
+
+@register_feature("impacting_cycle_share")
+def _phi(ctx: FeatureContext) -> float:
+    """Share of complete cycles with at least one impact."""
+    c = ctx.counts()
+    return float((c >= 1).mean()) if c.size else _NAN
+
+
+@register_feature("two_per_cycle_share")
+def _share2(ctx: FeatureContext) -> float:
+    """Share of complete cycles with exactly two impacts."""
+    c = ctx.counts()
+    return float((c == 2).mean()) if c.size else _NAN
+
+
+@register_feature("alternation")
+def _alternation(ctx: FeatureContext) -> float:
+    """Share of consecutive impacts on opposite walls (paper eq. 5)."""
+    if ctx.t.size < 2:
+        return _NAN
+    return float((ctx.side[1:] != ctx.side[:-1]).mean())
+
+
+@register_feature("chatter_share")
+def _chatter(ctx: FeatureContext) -> float:
+    """Share of impacts on the same wall as the previous one."""
+    if ctx.t.size < 2:
+        return _NAN
+    return float((ctx.side[1:] == ctx.side[:-1]).sum() / ctx.t.size)
+
+
+@register_feature("right_share")
+def _right_share(ctx: FeatureContext) -> float:
+    """Share of impacts on the right wall."""
+    return float((ctx.side == "right").mean()) if ctx.t.size else _NAN
+
+
+@register_feature("asymmetry")
+def _asym(ctx: FeatureContext) -> float:
+    """|mean dt after a right impact - mean dt after a left impact| / T (alternating pairs)."""
+    if ctx.t.size < 3:
+        return _NAN
+    dt = np.diff(ctx.t)
+    alt = ctx.side[1:] != ctx.side[:-1]
+    ar = dt[alt & (ctx.side[:-1] == "right")]
+    al = dt[alt & (ctx.side[:-1] == "left")]
+    if not (ar.size and al.size):
+        return _NAN
+    return float(abs(ar.mean() - al.mean()) / ctx.period)
+
+
+@register_feature("dt_cv")
+def _dt_cv(ctx: FeatureContext) -> float:
+    """Coefficient of variation of the impact time differences."""
+    dt = ctx.returnmap.dt
+    return float(dt.std() / dt.mean()) if dt.size >= 2 and dt.mean() > 0 else _NAN
+
+
+@register_feature("returnmap_clusters")
+def _clusters(ctx: FeatureContext) -> float:
+    """Clusters of the return map holding at least 5 % of its points."""
+    rm = ctx.returnmap
+    if rm.n_points == 0:
+        return 0.0
+    counts = np.bincount(rm.cluster)
+    return float((counts >= max(1, 0.05 * rm.n_points)).sum())
+
+
+@register_feature("returnmap_spread")
+def _spread(ctx: FeatureContext) -> float:
+    """RMS distance of return-map points to their cluster centre, in periods."""
+    rm = ctx.returnmap
+    if rm.n_points == 0:
+        return _NAN
+    c = rm.centres[rm.cluster]
+    d = np.hypot(rm.x - c[:, 0], rm.y - c[:, 1])
+    return float(np.sqrt(np.mean(d ** 2)) / rm.period)
+
+
+@register_feature("diagonal_distance")
+def _diag(ctx: FeatureContext) -> float:
+    """Mean distance of return-map points to the diagonal, in periods."""
+    rm = ctx.returnmap
+    if rm.n_points == 0:
+        return _NAN
+    return float(np.mean(np.abs(rm.y - rm.x)) / math.sqrt(2) / rm.period)
+
+
+@register_feature("dv_cv")
+def _dv_cv(ctx: FeatureContext) -> float:
+    """Coefficient of variation of the impact strengths |dv|."""
+    a = np.abs(ctx.dv)
+    return float(a.std() / a.mean()) if a.size >= 2 and a.mean() > 0 else _NAN
+
+
+def _cycle_amplitudes(ctx: FeatureContext) -> np.ndarray:
+    c = ctx.cycles()
+    if c.size < 2 or ctx.x.size == 0:
+        return np.zeros(0)
+    ok = np.isfinite(ctx.x)
+    idx = np.searchsorted(ctx.ts, c)
+    amp = []
+    for a, b in zip(idx[:-1], idx[1:]):
+        seg = ctx.x[a:b][ok[a:b]]
+        if seg.size:
+            amp.append(0.5 * (seg.max() - seg.min()))
+    return np.asarray(amp)
+
+
+@register_feature("envelope_modulation")
+def _modulation(ctx: FeatureContext) -> float:
+    """(P95 - P5) / (P95 + P5) of the per-cycle LO half peak-to-peak (DESIGN M)."""
+    amp = _cycle_amplitudes(ctx)
+    if amp.size == 0:
+        return _NAN
+    p5, p95 = np.percentile(amp, [5, 95])
+    return float((p95 - p5) / (p95 + p5)) if p95 + p5 > 0 else _NAN
+
+
+@register_feature("strobe_period_error")
+def _strobe(ctx: FeatureContext) -> float:
+    """Min over p <= 4 of the largest change of the stroboscopic LO displacement over
+    p cycles (last half of the record), relative to max |x|: ~0 when periodic.
+    """
+    c = ctx.cycles()
+    ok = np.isfinite(ctx.x)
+    if c.size < 6 or not ok.any():
+        return _NAN
+    xs = np.interp(c, ctx.ts[ok], ctx.x[ok])
+    xs = xs[xs.size // 2:]
+    amp = np.abs(ctx.x[ok]).max()
+    best = _NAN
+    for p in range(1, 5):
+        if xs.size <= p:
+            break
+        e = float(np.abs(xs[p:] - xs[:-p]).max() / amp) if amp > 0 else _NAN
+        best = e if not (best <= e) else best
+    return best

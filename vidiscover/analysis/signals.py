@@ -1,0 +1,227 @@
+"""Input conditioning shared by the analysis stages.
+
+Checks that a :class:`~vidiscover.recording.Recording` can be analysed (finite,
+uniform time axis, enough samples), finds bad samples (NaN dropouts, clipped
+accelerometer readings), fills them for filtering, estimates noise robustly and
+fits the base excitation (forcing frequency, amplitude and phase) from ``xe``.
+
+Examples
+--------
+>>> import numpy as np
+>>> robust_std(np.array([0.0, 1.0, -1.0, 0.5, -0.5, 100.0])) < 2
+True
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import InputError
+
+__all__ = ["Forcing", "check_recording", "robust_std", "fill_gaps", "clipped_mask",
+           "fit_forcing", "MIN_SAMPLES"]
+
+#: Fewest samples an analysis accepts (10 ms at 6400 Hz): shorter records cannot
+#: hold one impact pulse with its acquisition kernel.
+MIN_SAMPLES = 64
+
+
+def check_recording(rec, min_samples: int = MIN_SAMPLES) -> float:
+    """Validate the time axis and length of ``rec``; return the sampling rate.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording to analyse.
+    min_samples : int
+        Fewest samples accepted.
+
+    Returns
+    -------
+    float
+        Sampling rate (Hz).
+
+    Raises
+    ------
+    InputError
+        If the record is too short, or ``t`` is not finite, increasing and uniform.
+    """
+    n = rec.n
+    if n < min_samples:
+        raise InputError(f"{rec.name}: the record has {n} samples; the analysis needs at "
+                         f"least {min_samples} (about {min_samples / 6400 * 1e3:.0f} ms at "
+                         "6400 Hz); give a longer recording")
+    t = rec.t
+    if not np.isfinite(t).all():
+        raise InputError(f"{rec.name}: column 't' has {int((~np.isfinite(t)).sum())} "
+                         "non-finite value(s); time must be finite and uniform")
+    d = np.diff(t)
+    dt = float(np.median(d))
+    if not dt > 0 or (d <= 0).any():
+        raise InputError(f"{rec.name}: column 't' must increase strictly; fix the time axis")
+    if np.abs(d - dt).max() > 1e-3 * dt:
+        raise InputError(f"{rec.name}: column 't' is not uniformly sampled (steps from "
+                         f"{d.min():.6g} to {d.max():.6g} s); resample to a uniform grid")
+    fs = rec.sample_rate
+    if not (math.isfinite(fs) and fs > 0) or abs(fs * dt - 1.0) > 1e-3:
+        raise InputError(f"{rec.name}: sample_rate {fs!r} Hz disagrees with the time step "
+                         f"{dt:.6g} s of 't'; fix the metadata")
+    return float(fs)
+
+
+def robust_std(x: np.ndarray) -> float:
+    """Standard deviation from the median absolute deviation (1.4826 MAD).
+
+    Non-finite values are ignored; returns 0.0 for an empty input.
+    """
+    x = np.asarray(x, dtype=float)
+    x = x[np.isfinite(x)]
+    if x.size == 0:
+        return 0.0
+    return float(1.4826 * np.median(np.abs(x - np.median(x))))
+
+
+def fill_gaps(y: np.ndarray, bad: np.ndarray) -> np.ndarray:
+    """Copy of ``y`` with the ``bad`` samples replaced by linear interpolation.
+
+    Gaps at the ends take the nearest good value; an all-bad input gives zeros.
+    """
+    y = np.array(y, dtype=float)
+    if not bad.any():
+        return y
+    good = ~bad
+    if not good.any():
+        return np.zeros_like(y)
+    idx = np.arange(y.size)
+    y[bad] = np.interp(idx[bad], idx[good], y[good])
+    return y
+
+
+def clipped_mask(a: np.ndarray, a_range: float | None = None) -> np.ndarray:
+    """Samples that sit on the accelerometer's range limit.
+
+    A sample is clipped when it equals the record's maximum (or minimum) value and
+    that extreme value occurs at least twice (a saturating front end repeats its
+    rail value exactly; noise makes exact repeats of an extreme improbable), or
+    when ``|a| >= a_range`` for a known range.
+
+    Parameters
+    ----------
+    a : ndarray
+        Acceleration (NaN allowed).
+    a_range : float, optional
+        Known range of the accelerometer (m/s^2).
+
+    Returns
+    -------
+    ndarray of bool
+    """
+    finite = np.isfinite(a)
+    mask = np.zeros(a.shape, dtype=bool)
+    if not finite.any():
+        return mask
+    af = np.where(finite, a, 0.0)
+    if a_range is not None:
+        mask |= finite & (np.abs(af) >= a_range)
+    hi, lo = af[finite].max(), af[finite].min()
+    for rail in (hi, lo):
+        at = finite & (af == rail)
+        if at.sum() >= 2 and rail != 0.0:
+            mask |= at
+    return mask
+
+
+@dataclass(frozen=True)
+class Forcing:
+    """The base excitation fitted to ``xe``: ``xe ~ c + amplitude sin(2 pi f t + phase)``.
+
+    Attributes
+    ----------
+    frequency : float
+        Forcing frequency f (Hz).
+    amplitude : float
+        Base displacement amplitude (m).
+    phase : float
+        Phase (rad) of the base sine at t = 0 (record time).
+    source : str
+        "xe" when fitted, "metadata" when ``xe`` was unusable.
+    """
+
+    frequency: float
+    amplitude: float
+    phase: float
+    source: str = "xe"
+
+    @property
+    def period(self) -> float:
+        """Forcing period 1/f (s)."""
+        return 1.0 / self.frequency
+
+    def cycle_starts(self, t0: float, t1: float) -> np.ndarray:
+        """Times of base phase 0 (start of each cycle) within [t0, t1]."""
+        T = self.period
+        shift = -self.phase / (2 * math.pi) * T        # a time with phase 0
+        k0 = math.ceil((t0 - shift) / T - 1e-9)
+        k1 = math.floor((t1 - shift) / T + 1e-9)
+        return shift + np.arange(k0, k1 + 1) * T
+
+
+def fit_forcing(t: np.ndarray, xe: np.ndarray, f_hint: float, iterations: int = 3
+                ) -> Forcing:
+    """Fit a sine at (about) ``f_hint`` to the base displacement.
+
+    The frequency is refined from the phase drift between the two halves of the
+    record (complex demodulation at the current estimate, kept within 5 % of the
+    hint), then amplitude and phase by linear least squares. The signal is
+    decimated to at most about 4096 samples first (the forcing is slow).
+
+    Parameters
+    ----------
+    t, xe : ndarray
+        Time (s) and base displacement (m); NaN samples are ignored.
+    f_hint : float
+        Nominal forcing frequency (Hz), e.g. from the metadata.
+    iterations : int
+        Frequency refinement steps.
+
+    Returns
+    -------
+    Forcing
+        With ``source="metadata"`` (frequency = hint, phase 0) if ``xe`` has no
+        usable sine (all NaN, constant or shorter than one period).
+    """
+    fallback = Forcing(float(f_hint), float("nan"), 0.0, "metadata")
+    ok = np.isfinite(xe)
+    if ok.sum() < 8 or (t[-1] - t[0]) < 1.0 / f_hint:
+        return fallback
+    step = max(1, int(ok.size // 4096))
+    tt = t[::step][ok[::step]]
+    yy = xe[::step][ok[::step]]
+    if tt.size < 8:
+        return fallback
+    yy = yy - yy.mean()
+    f = float(f_hint)
+    half = tt.size // 2
+    if (tt[-1] - tt[0]) * f_hint >= 4:            # frequency refinement needs a few cycles
+        for _ in range(iterations):
+            ph = np.exp(-2j * math.pi * f * tt)
+            c1 = np.dot(yy[:half], ph[:half])
+            c2 = np.dot(yy[half:], ph[half:])
+            if c1 == 0 or c2 == 0:
+                break
+            gap = tt[half:].mean() - tt[:half].mean()
+            f_new = f + float(np.angle(c2 / c1)) / (2 * math.pi * gap)
+            if not math.isfinite(f_new) or abs(f_new - f_hint) > 0.05 * f_hint:
+                break
+            f = f_new
+    w = 2 * math.pi * f
+    A = np.column_stack([np.sin(w * tt), np.cos(w * tt), np.ones_like(tt)])
+    coef = np.linalg.solve(A.T @ A + 1e-30 * np.eye(3), A.T @ yy)
+    amp = math.hypot(coef[0], coef[1])
+    noise = robust_std(yy - A @ coef)
+    if not math.isfinite(amp) or amp == 0.0 or amp < 3 * noise / math.sqrt(tt.size):
+        return fallback
+    return Forcing(float(f), float(amp), float(math.atan2(coef[1], coef[0])), "xe")
