@@ -82,7 +82,77 @@ def _parse_params(preset_name: str, b: float | None, param: tuple[str, ...]):
     return preset(preset_name, **changes)
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class LazyGroup(click.Group):
+    """A click group whose commands live in their own modules, imported on use.
+
+    ``LAZY_COMMANDS`` maps a command name to ``"module:attribute"``; only the
+    module of the command being run (or asked for help) is imported, so adding a
+    command never slows ``vidiscover --help`` down.
+    """
+
+    def __init__(self, *args, lazy_commands: dict[str, str] | None = None, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.lazy_commands = dict(lazy_commands or {})
+
+    def list_commands(self, ctx):
+        return sorted(set(super().list_commands(ctx)) | set(self.lazy_commands))
+
+    def get_command(self, ctx, cmd_name):
+        if cmd_name in self.lazy_commands:
+            import importlib
+
+            module, _, attr = self.lazy_commands[cmd_name].partition(":")
+            return getattr(importlib.import_module(module), attr)
+        return super().get_command(ctx, cmd_name)
+
+    def format_commands(self, ctx, formatter):
+        # Short help without importing every command module.
+        rows = [(name, LAZY_HELP.get(name) or self._short_help(ctx, name))
+                for name in self.list_commands(ctx)]
+        with formatter.section("Commands"):
+            formatter.write_dl(rows)
+
+    def _short_help(self, ctx, name):
+        cmd = super().get_command(ctx, name)
+        return cmd.get_short_help_str(limit=70) if cmd is not None else ""
+
+
+#: Commands defined outside this module: name -> "module:attribute".
+LAZY_COMMANDS: dict[str, str] = {
+    "analyze": "vidiscover.commands.analyze:analyze",
+    "discover": "vidiscover.commands.discover:discover",
+    "classify": "vidiscover.commands.regimes:classify",
+    "train": "vidiscover.commands.regimes:train",
+    "sweep": "vidiscover.commands.regimes:sweep",
+    "gap": "vidiscover.commands.gap:gap",
+    "gap-check": "vidiscover.commands.gap:gap_check",
+}
+
+#: One-line help of the lazy commands (shown by ``vidiscover --help``).
+LAZY_HELP: dict[str, str] = {
+    "analyze": "Find impacts, reconstruct the ball, estimate restitution, report.",
+    "discover": "Discover the flight law and the impact law per wall (pysindy).",
+    "classify": "Label recordings by regime, with class probabilities.",
+    "train": "Simulate a sweep, train and evaluate the regime classifier.",
+    "sweep": "Sweep a parameter: table of regimes and a bifurcation diagram.",
+    "gap": "Diagnose the sim-to-real gap of a recording against the nominal model.",
+    "gap-check": "Validate the gap diagnosis on recordings with withheld effects.",
+}
+
+
+def _available_lazy() -> dict[str, str]:
+    """Lazy commands whose module exists in this installation."""
+    import importlib.util
+
+    out = {}
+    for name, target in LAZY_COMMANDS.items():
+        if importlib.util.find_spec(target.partition(":")[0]) is not None:
+            out[name] = target
+    return out
+
+
+@click.group(cls=LazyGroup, lazy_commands=None,
+             context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(package_name="vidiscover")
 def main() -> None:
     """Model discovery and regime classification of vibro-impact systems.
@@ -149,6 +219,9 @@ def demo(out, seed, as_json):
     result = run_demo(out, seed=seed, progress=not as_json)
     human = "\n".join([f"demo written to {out}/"] + [f"  {p}" for p in result["outputs"]])
     emit(as_json, result, human)
+
+
+main.lazy_commands = _available_lazy()
 
 
 if __name__ == "__main__":  # pragma: no cover

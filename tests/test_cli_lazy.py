@@ -1,0 +1,34 @@
+"""The CLI imports a command's module only when that command runs."""
+
+import subprocess
+import sys
+
+from click.testing import CliRunner
+
+from vidiscover import cli
+
+
+def test_help_lists_every_installed_command_without_importing_them():
+    code = ("import sys; from click.testing import CliRunner; from vidiscover.cli import main;"
+            "r = CliRunner().invoke(main, ['--help']); print(r.output);"
+            "heavy = [m for m in ('numpy', 'scipy', 'pandas', 'matplotlib', 'sklearn', 'pysindy')"
+            " if m in sys.modules]; print('HEAVY', heavy)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert "HEAVY []" in out
+    for name in ("simulate", "demo", *cli.main.lazy_commands):
+        assert f"  {name} " in out
+
+
+def test_lazy_commands_resolve_to_click_commands():
+    import click
+
+    for name in cli.main.lazy_commands:
+        cmd = cli.main.get_command(click.Context(cli.main), name)
+        assert isinstance(cmd, click.Command), name
+
+
+def test_unknown_command_is_a_usage_error():
+    res = CliRunner().invoke(cli.main, ["no-such-command"])
+    assert res.exit_code == 2
+    assert "No such command" in res.output
