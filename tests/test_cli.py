@@ -1,4 +1,5 @@
 import json
+import re
 
 import pytest
 from click.testing import CliRunner
@@ -67,3 +68,33 @@ def test_simulate_unknown_format(runner, tmp_path):
     res = runner.invoke(main, ["simulate", "--out", str(tmp_path / "rec.xlsx"), *FAST])
     assert res.exit_code == 2 and "unknown format '.xlsx'" in res.stderr
     assert list(tmp_path.iterdir()) == []
+
+
+def test_demo_writes_recordings_reports_and_an_index(tmp_path):
+    from vidiscover.demo import run_demo
+
+    out = tmp_path / "demo"
+    doc = run_demo(out, seed=1, progress=False, clearances_mm=(9.0, 15.0), settle=4.0,
+                   duration=2.0, figures=False)
+    written = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
+    assert sorted(doc["outputs"]) == written
+    for stem in ("paper_b9mm", "paper_b15mm"):
+        for f in (f"{stem}.csv", f"{stem}.json", f"{stem}.truth.json", f"{stem}.png",
+                  f"{stem}/summary.json", f"{stem}/impacts.csv", f"{stem}/report.html"):
+            assert f in written
+    index = (out / "index.html").read_text(encoding="utf-8")
+    assert re.findall(r'href="([^"]+)"', index) == ["paper_b9mm/report.html",
+                                                    "paper_b15mm/report.html"]
+    for r in doc["recordings"]:
+        assert abs(r["r_right_rms"] - 0.8782) < 0.02 and abs(r["r_left_rms"] - 0.2018) < 0.02
+        s = json.loads((out / r["report"]).with_name("summary.json").read_text())
+        assert s["impacts"]["n"] == r["detected"] > 0
+
+
+@pytest.mark.slow
+def test_demo_command_full_size(runner, tmp_path):
+    res = runner.invoke(main, ["demo", "--out", str(tmp_path / "d"), "--json"])
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.stdout)
+    assert "index.html" in doc["outputs"] and len(doc["recordings"]) == 5
+    assert all((tmp_path / "d" / f).is_file() for f in doc["outputs"])

@@ -65,6 +65,13 @@ def _json_default(obj):
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
+def _fmt(value, digits: int = 3) -> str:
+    """A number for human output ('n/a' for None/NaN)."""
+    if value is None or value != value:
+        return "n/a"
+    return f"{value:.{digits}f}"
+
+
 def _parse_params(preset_name: str, b: float | None, param: tuple[str, ...]):
     from .params import preset
 
@@ -217,7 +224,14 @@ def demo(out, seed, as_json):
     from .demo import run_demo
 
     result = run_demo(out, seed=seed, progress=not as_json)
-    human = "\n".join([f"demo written to {out}/"] + [f"  {p}" for p in result["outputs"]])
+    lines = [f"demo: {len(result['outputs'])} files written to {out}/; open {result['index']}"]
+    for r in result.get("recordings", []):
+        lines.append(f"  {r['name']}: {r['detected']} impacts detected "
+                     f"({r['n_impacts']} true), regime {r['regime']}; "
+                     f"r right {_fmt(r['r_right_rms'])} (true {_fmt(r['r_right_true_rms'])}), "
+                     f"r left {_fmt(r['r_left_rms'])} (true {_fmt(r['r_left_true_rms'])}) "
+                     f"-> {r['report']}")
+    human = "\n".join(lines)
     emit(as_json, result, human)
 
 
