@@ -23,7 +23,7 @@ from .impacts import ImpactDetection, detect_impacts
 from .reconstruction import Reconstruction, reconstruct
 from .restitution import MU_TABLE, RestitutionEstimate, estimate_restitution, mu_table
 from .returnmap import FeatureContext, ReturnMap, compute_features, return_map
-from .signals import Forcing, check_recording, fit_forcing
+from .signals import Forcing, fit_forcing
 
 __all__ = ["AnalysisResult", "analyze"]
 
@@ -187,9 +187,8 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 
     """
     if not (isinstance(mu, (int, float)) and math.isfinite(mu) and 0 <= mu <= 2):
         raise InputError(f"mu must be in [0, 2] (friction coefficient), was {mu!r}")
-    check_recording(rec)
     b = float(rec.meta.b if b is None else b)
-    det = detect_impacts(rec, threshold=threshold, mu=mu, b=b)
+    det = detect_impacts(rec, threshold=threshold, mu=mu, b=b)     # checks the recording
     recon = reconstruct(det, rec, b=b, mu=mu)
     rest = estimate_restitution(recon, det, n_boot=n_boot, seed=seed)
     forcing = fit_forcing(rec.t, rec.xe, rec.meta.frequency)

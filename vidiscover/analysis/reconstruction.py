@@ -253,7 +253,7 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
     x_f = X_raw + D
     v_f = V_s + S + Dd
     xl_f = fill_gaps(xl, ~okx) if not okx.all() else xl
-    v_disp = np.gradient(xl_f, dt)
+    v_disp = _gradient(xl_f, dt)
     resid = (xl - x_f)[okx]
     position_noise = max(robust_std(resid[:: max(1, resid.size // 8192)]), 1e-9)
 
@@ -297,9 +297,23 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
                           position_noise=float(position_noise), _traj=traj)
 
 
+def _gradient(y: np.ndarray, h: float) -> np.ndarray:
+    """``np.gradient(y, h)``: central differences inside, one-sided at the ends."""
+    out = np.empty_like(y)
+    if y.size < 2:
+        out[:] = 0.0
+        return out
+    np.subtract(y[2:], y[:-2], out=out[1:-1])
+    out[1:-1] /= 2.0 * h
+    out[0] = (y[1] - y[0]) / h
+    out[-1] = (y[-1] - y[-2]) / h
+    return out
+
+
 def _drift(tr, e, ok, fs, window):
-    """Slow drift D (m) and its derivative (m/s) of the residual ``e``, by a local
-    quadratic (Savitzky-Golay) smoother of block means.
+    """Slow drift D (m) and its derivative (m/s) of the residual ``e``.
+
+    By a local quadratic (Savitzky-Golay) smoother of block means.
     """
     n = tr.size
     B = _BLOCK if n >= 8 * _BLOCK else 1

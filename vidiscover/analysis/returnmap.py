@@ -20,6 +20,7 @@ Examples
 
 from __future__ import annotations
 
+import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -110,8 +111,10 @@ def return_map(t: np.ndarray, side: np.ndarray, period: float, radius: float = 0
 
 
 def _linkage_clusters(points: np.ndarray, radius: float):
-    """Single-linkage clusters (points closer than ``radius`` chain together) and
-    their centres; above 2000 points, cells of size ``radius`` instead.
+    """Single-linkage clusters and their centres.
+
+    Points closer than ``radius`` chain together; above 2000 points, cells of size
+    ``radius`` instead.
     """
     n = points.shape[0]
     if n == 0:
@@ -167,14 +170,30 @@ class FeatureContext:
 
     def cycles(self) -> np.ndarray:
         """Start times of the complete cycles plus the end of the last one."""
-        return self.forcing.cycle_starts(self.t_start, self.t_end)
+        return self._cycles
 
     def counts(self) -> np.ndarray:
         """Impacts per complete cycle."""
-        c = self.cycles()
+        return self._counts
+
+    @functools.cached_property
+    def _cycles(self) -> np.ndarray:
+        c = self.forcing.cycle_starts(self.t_start, self.t_end)
+        c.flags.writeable = False
+        return c
+
+    @functools.cached_property
+    def _counts(self) -> np.ndarray:
+        c = self._cycles
         if c.size < 2:
             return np.zeros(0, dtype=np.int64)
-        return np.histogram(self.t, bins=c)[0]
+        # impacts in [c_k, c_k+1), the last bin closed (as np.histogram)
+        t = np.sort(np.asarray(self.t, dtype=float))
+        k = np.searchsorted(t, c, side="left")
+        k[-1] = np.searchsorted(t, c[-1], side="right")
+        out = np.diff(k)
+        out.flags.writeable = False
+        return out
 
 
 #: Feature registry: name -> function(FeatureContext) -> float.
@@ -308,17 +327,24 @@ def _dv_cv(ctx: FeatureContext) -> float:
 
 
 def _cycle_amplitudes(ctx: FeatureContext) -> np.ndarray:
+    """Half peak-to-peak of the finite LO displacement in each complete cycle."""
     c = ctx.cycles()
     if c.size < 2 or ctx.x.size == 0:
         return np.zeros(0)
     ok = np.isfinite(ctx.x)
     idx = np.searchsorted(ctx.ts, c)
-    amp = []
-    for a, b in zip(idx[:-1], idx[1:]):
-        seg = ctx.x[a:b][ok[a:b]]
-        if seg.size:
-            amp.append(0.5 * (seg.max() - seg.min()))
-    return np.asarray(amp)
+    lo, hi = idx[:-1], idx[1:]
+    cnt = np.concatenate([[0], np.cumsum(ok)])
+    keep = (hi > lo) & (cnt[hi] > cnt[lo])          # cycles with a finite sample
+    if not keep.any():
+        return np.zeros(0)
+    lo = lo[keep]
+    end = int(hi[keep][-1])
+    # each segment runs to the next kept start; cycles skipped in between hold no
+    # finite sample, and non-finite samples are neutral (-inf / +inf)
+    xmax = np.maximum.reduceat(np.where(ok, ctx.x, -np.inf)[:end], lo)
+    xmin = np.minimum.reduceat(np.where(ok, ctx.x, np.inf)[:end], lo)
+    return 0.5 * (xmax - xmin)
 
 
 @register_feature("envelope_modulation")
@@ -333,8 +359,10 @@ def _modulation(ctx: FeatureContext) -> float:
 
 @register_feature("strobe_period_error")
 def _strobe(ctx: FeatureContext) -> float:
-    """Min over p <= 4 of the largest change of the stroboscopic LO displacement over
-    p cycles (last half of the record), relative to max |x|: ~0 when periodic.
+    """Periodicity error of the stroboscopic LO displacement (~0 when periodic).
+
+    Min over p <= 4 of the largest change over p cycles (last half of the record),
+    relative to max |x|.
     """
     c = ctx.cycles()
     ok = np.isfinite(ctx.x)
