@@ -1,0 +1,186 @@
+"""``vidiscover discover REC... --out DIR``: flight law and impact law per wall.
+
+All recordings are read and checked first, then analysed and pooled
+(:func:`vidiscover.discovery.discover`); the output directory is written
+atomically (bad input leaves nothing behind):
+
+* ``discovery.json`` -- the summary (DESIGN.md section 6 keys ``flight.mu``,
+  ``flight.theta_deg``, ``flight.terms``, ``impact_law.right.formula``,
+  ``impact_law.left.formula``, and the intervals, candidate tables, comparison
+  with a constant r, warnings);
+* ``equations.txt`` -- the discovered laws as text;
+* ``impacts.csv`` -- the pooled impacts used per wall (speed, r, standard error);
+* ``candidates_right.csv``, ``candidates_left.csv`` -- every impact-law candidate
+  with its AICc, CV error and bootstrap selection frequency;
+* ``flight_residuals.csv`` and ``figures/impact_laws.png``,
+  ``figures/flight_residuals.png``.
+
+``--json`` prints the summary plus ``out`` and ``files``.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import click
+
+from ..cli import emit, handle_errors
+from ..errors import InputError
+
+__all__ = ["discover", "run_discover", "human_lines"]
+
+
+def run_discover(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
+                 seed: int = 0, n_bootstrap: int = 200, criterion: str = "aicc",
+                 min_effect: float = 0.0, flight: bool = True, figures: bool = True,
+                 progress: bool = False) -> dict:
+    """Discover the laws of pooled recordings and write the results (in-process CLI).
+
+    Parameters
+    ----------
+    paths : sequence of path-like
+        Recordings (CSV, Parquet or NPZ with a metadata sidecar or ``meta``).
+    out : Path
+        Output directory (created atomically).
+    mu : float
+        Friction coefficient assumed by the analyses, in [0, 2].
+    meta : Path, optional
+        Metadata JSON for every recording (default: each recording's sidecar).
+    seed : int
+        Seed of the bootstraps and cross-validation splits.
+    n_bootstrap : int
+        Bootstrap resamples of the impact laws.
+    criterion : {"aicc", "cv"}
+        Impact-law selection rule.
+    min_effect : float
+        Practical tolerance on r of the impact-law selection (0: off).
+    flight : bool
+        Run the flight-law discovery.
+    figures : bool
+        Render the figures.
+    progress : bool
+        Show a progress bar on stderr.
+
+    Returns
+    -------
+    dict
+        The summary plus ``out`` and ``files`` (relative to ``out``).
+
+    Raises
+    ------
+    InputError
+        Bad options, unreadable recordings or metadata, an output path that is a
+        file. Nothing is written then.
+    """
+    import pandas as pd
+
+    from .._atomic import atomic_directory, write_json
+    from ..discovery import discover as discover_laws
+    from ..io import read_recording
+
+    if not (math.isfinite(mu) and 0.0 <= mu <= 2.0):
+        raise InputError(f"--mu must be in [0, 2] (friction coefficient between ball "
+                         f"and LO), was {mu!r}")
+    if n_bootstrap < 0:
+        raise InputError(f"--n-bootstrap must be >= 0, was {n_bootstrap}")
+    if not (math.isfinite(min_effect) and min_effect >= 0):
+        raise InputError(f"--min-effect must be >= 0 (tolerance on r), was {min_effect!r}")
+    if seed < 0:
+        raise InputError(f"--seed must be >= 0, was {seed}")
+    paths = [Path(p) for p in paths]
+    if not paths:
+        raise InputError("no recording given; pass one or more recording files")
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out}: exists and is not a directory; choose another --out")
+    recordings = [read_recording(p, meta=meta) for p in paths]   # check all inputs first
+    result = discover_laws(recordings, mu=mu, seed=seed, n_bootstrap=n_bootstrap,
+                           criterion=criterion, flight=flight, progress=progress,
+                           impact_kws={"min_effect": float(min_effect)})
+    doc = result.summary()
+    files = ["discovery.json", "equations.txt", "impacts.csv", "candidates_right.csv",
+             "candidates_left.csv", "flight_residuals.csv"]
+    with atomic_directory(out) as tmp:
+        (tmp / "equations.txt").write_text("\n".join(result.equations()) + "\n")
+        pd.concat([d.assign(side=side) for side, d in result.impact_data.items()],
+                  ignore_index=True).to_csv(tmp / "impacts.csv", index=False)
+        for side, law in result.impact_laws.items():
+            law.candidates.to_csv(tmp / f"candidates_{side}.csv", index=False)
+        result.flight_residuals().to_csv(tmp / "flight_residuals.csv", index=False)
+        if figures:
+            from ..discovery.figures import write_figures
+
+            (tmp / "figures").mkdir()
+            files += [f"figures/{f}" for f in write_figures(result, tmp / "figures")]
+        doc = {**doc, "out": str(out), "files": files}
+        write_json(tmp / "discovery.json", doc)
+    return doc
+
+
+def _fmt(x, spec: str = ".3g") -> str:
+    return "n/a" if x is None else format(x, spec)
+
+
+def human_lines(doc: dict) -> list[str]:
+    """Text report of a ``discover`` summary."""
+    lines = [f"discover: {doc['n_recordings']} recording(s) pooled, mu assumed "
+             f"{doc['mu_assumed']:g}"]
+    lines += ["  " + e for e in doc["equations"]]
+    fl = doc["flight"]
+    if fl is not None:
+        lines.append(f"  flight: mu = {_fmt(fl['mu'], '.4g')} "
+                     f"[{_fmt(fl['mu_ci'][0])}, {_fmt(fl['mu_ci'][1])}], theta = "
+                     f"{_fmt(fl['theta_deg'], '.4g')} deg [{_fmt(fl['theta_ci'][0])}, "
+                     f"{_fmt(fl['theta_ci'][1])}]")
+    for side in ("right", "left"):
+        law = doc["impact_law"][side]
+        cis = ", ".join(f"{t}: {_fmt(c['value'], '.4g')} [{_fmt(c['ci'][0], '.4g')}, "
+                        f"{_fmt(c['ci'][1], '.4g')}]" for t, c in law["coefficients"].items())
+        lines.append(f"  {side}: coefficients {cis or 'none'}")
+        if law["alternative"]:
+            lines.append(f"  {side}: vs constant r: dAICc = "
+                         f"{_fmt(law['delta_aicc_vs_constant'])}, p = "
+                         f"{_fmt(law['p_value_vs_constant'])} ({law['alternative']}); "
+                         f"chosen in {_fmt(law['support_frequency'], '.0%')} of resamples")
+    lines += [f"  warning: {w}" for w in doc["warnings"]]
+    if "out" in doc:
+        lines.append(f"  written to {doc['out']}")
+    return lines
+
+
+@click.command("discover")
+@click.argument("recordings", nargs=-1, required=True,
+                type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path), required=True,
+              help="Output directory.")
+@click.option("--mu", type=float, default=0.0, show_default=True,
+              help="Friction coefficient assumed by the analyses (paper eq. 8).")
+@click.option("--meta", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Metadata JSON for every recording, if not beside it (rec.json).")
+@click.option("--seed", type=int, default=0, show_default=True,
+              help="Seed of the bootstraps and cross-validation splits.")
+@click.option("--n-bootstrap", type=int, default=200, show_default=True,
+              help="Bootstrap resamples of the impact laws.")
+@click.option("--criterion", type=click.Choice(["aicc", "cv"]), default="aicc",
+              show_default=True, help="Impact-law selection: AICc window or CV one-SE rule.")
+@click.option("--min-effect", type=float, default=0.0, show_default=True,
+              help="Practical tolerance on r: a sparser law whose curve stays this close "
+                   "to the best one is adequate (0: AICc alone decides).")
+@click.option("--no-flight", is_flag=True, help="Skip the flight-law discovery.")
+@click.option("--no-figures", is_flag=True, help="Skip the figures (faster).")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON document.")
+@handle_errors
+def discover(recordings, out, mu, meta, seed, n_bootstrap, criterion, min_effect, no_flight,
+             no_figures, as_json):
+    """Discover the flight law and the impact law per wall from pooled recordings.
+
+    RECORDINGS are CSV/Parquet/NPZ files with columns t, x, a, xe and a metadata
+    sidecar (rec.json); pool several (e.g. different clearances) so that the
+    impact speeds span a range. Writes discovery.json, equations.txt, CSV tables
+    and figures/ into --out.
+    """
+    doc = run_discover(recordings, out, mu=mu, meta=meta, seed=seed, n_bootstrap=n_bootstrap,
+                       criterion=criterion, min_effect=min_effect, flight=not no_flight,
+                       figures=not no_figures, progress=not as_json and len(recordings) > 1)
+    emit(as_json, doc, "\n".join(human_lines(doc)))

@@ -1,0 +1,252 @@
+"""The result of impact-law discovery and the notion of "same functional form".
+
+:class:`ImpactLawResult` is a frozen value: the selected law, its coefficients with
+bootstrap intervals, the table of all candidates, the comparison with a constant r
+and the bootstrap band of r(v). :func:`same_form` says whether two laws have the same
+functional form *as far as pooled impact data can tell* (:data:`EQUIVALENT_EXPONENTS`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..restitution_laws import RestitutionLaw
+from .impact_terms import CONSTANT_TERM, IMPACT_TERMS
+
+if TYPE_CHECKING:  # pragma: no cover
+    import pandas as pd
+
+__all__ = ["ImpactLawResult", "same_form", "EQUIVALENT_EXPONENTS", "RESULT_KINDS"]
+
+#: Groups of power-law exponents that :func:`same_form` treats as one form: the
+#: best-fitting curves ``1 - a v^0.2`` and ``1 - a' v^0.25`` differ by at most
+#: ~0.04 a in r over 0.3-1.3 m/s (0.011 for a = 0.3), about the scatter of a real
+#: rig's r estimates. Simulated data at the default sensor noise do resolve them;
+#: the tests check exact exponents.
+EQUIVALENT_EXPONENTS: tuple[frozenset[float], ...] = (frozenset({0.2, 0.25}),)
+
+#: Values of :attr:`ImpactLawResult.kind`: a :data:`~vidiscover.LAW_KINDS` kind,
+#: ``"generic"`` (a formula with no RestitutionLaw kind) or ``"undetermined"``.
+RESULT_KINDS = ("constant", "linear", "power", "generic", "undetermined")
+
+
+
+def _exponent_group(p: float) -> frozenset[float]:
+    for group in EQUIVALENT_EXPONENTS:
+        if any(math.isclose(p, q, rel_tol=1e-9) for q in group):
+            return group
+    return frozenset({round(float(p), 9)})
+
+
+def _normal_law(law: RestitutionLaw) -> RestitutionLaw:
+    """``1 - a v^1`` is the linear law with ``r0 = 1``."""
+    if law.kind == "power" and math.isclose(law.p, 1.0):
+        return RestitutionLaw("linear", r0=1.0, a=law.a)
+    return law
+
+
+def same_form(a: RestitutionLaw | str | None, b: RestitutionLaw | str | None) -> bool:
+    """Whether two laws have the same functional form, as far as data can tell.
+
+    Same kind (``1 - a v`` counts as linear), and for power laws exponents in the
+    same group of :data:`EQUIVALENT_EXPONENTS` (or equal). Coefficients are ignored.
+
+    Parameters
+    ----------
+    a, b : RestitutionLaw, spec string or None
+        Laws to compare; None (a generic discovered formula) matches nothing.
+
+    Returns
+    -------
+    bool
+        True when the forms agree.
+
+    Examples
+    --------
+    >>> same_form("power:0.3:0.2", "power:0.1:0.25"), same_form("power:0.3:0.5", "0.9")
+    (True, False)
+    """
+    if a is None or b is None:
+        return False
+    a, b = _normal_law(RestitutionLaw.parse(a)), _normal_law(RestitutionLaw.parse(b))
+    if a.kind != b.kind:
+        return False
+    return a.kind != "power" or _exponent_group(a.p) == _exponent_group(b.p)
+
+
+# --------------------------------------------------------------------------- result
+def _num(x: Any) -> float | None:
+    x = float(x)
+    return x if math.isfinite(x) else None
+
+
+def _evaluate(terms: Sequence[str], coefs: np.ndarray, v) -> np.ndarray:
+    v = np.asarray(v, dtype=float)
+    cols = np.stack([IMPACT_TERMS[t](v) for t in terms], axis=-1)
+    return cols @ np.asarray(coefs, dtype=float).T
+
+
+@dataclass(frozen=True, eq=False)
+class ImpactLawResult:
+    """Discovered impact law of one wall, with uncertainty and model comparison.
+
+    Attributes
+    ----------
+    formula : str
+        E.g. ``'r = 1 - 0.3 v^0.5'`` (the law's formula when ``law`` is set).
+    kind : str
+        One of :data:`RESULT_KINDS`.
+    law : RestitutionLaw or None
+        The law, when the selected candidate matches a RestitutionLaw kind.
+    terms : tuple of str
+        Terms of ``r = sum_k c_k f_k(v)`` (registry names; ``"1"`` is the intercept).
+    coefficients : Mapping[str, float]
+        ``c_k`` per term.
+    ci : Mapping[str, tuple of float]
+        Bootstrap percentile interval at ``level`` per term (NaN without bootstrap).
+    fixed_intercept : bool
+        The intercept is fixed at 1 (``1 - r`` was regressed), not estimated.
+    candidates : pandas.DataFrame
+        One row per candidate: ``name, n_params, rss, aicc, delta_aicc, cv_rmse,
+        source, selected, bootstrap_frequency``.
+    delta_aicc_vs_constant : float
+        ``AICc(constant) - AICc(alternative)``; > 0 favours a velocity dependence.
+    p_value_vs_constant : float
+        F-test p-value of the constant law against ``alternative`` (post-selection).
+    alternative : str
+        Candidate compared with the constant: the selected one, or the best
+        velocity-dependent candidate when a constant is selected.
+    speed_range : tuple of float
+        Min and max impact speed used (m/s).
+    n, n_dropped, n_outliers : int
+        Impacts used; rows dropped for NaN/inf; rows dropped as gross outliers.
+    sigma : float
+        Residual RMS of the selected fit (unweighted, in units of r).
+    support_frequency : float
+        Share of bootstrap resamples in which the selection picks the same candidate.
+    selection_frequency : Mapping[str, float]
+        Share of bootstrap resamples picking each candidate (decreasing).
+    criterion : str
+        ``"aicc"`` or ``"cv"``.
+    level : float
+        Confidence level of ``ci`` and :meth:`band`.
+    warning : str or None
+        Why the fit fell back to a constant (or found nothing), else None.
+    boot_coefficients : ndarray, shape (n_bootstrap, len(terms))
+        Refitted coefficients per resample.
+    """
+
+    formula: str
+    kind: str
+    law: RestitutionLaw | None
+    terms: tuple[str, ...]
+    coefficients: Mapping[str, float]
+    ci: Mapping[str, tuple[float, float]]
+    fixed_intercept: bool
+    candidates: pd.DataFrame = field(repr=False)
+    delta_aicc_vs_constant: float
+    p_value_vs_constant: float
+    alternative: str
+    speed_range: tuple[float, float]
+    n: int
+    n_dropped: int
+    n_outliers: int
+    sigma: float
+    support_frequency: float
+    selection_frequency: Mapping[str, float] = field(repr=False)
+    criterion: str
+    level: float
+    warning: str | None
+    boot_coefficients: np.ndarray = field(repr=False)
+
+    def __post_init__(self) -> None:
+        if self.kind not in RESULT_KINDS:
+            raise ValueError(f"kind must be one of {', '.join(RESULT_KINDS)}, was {self.kind!r}")
+        unknown = [t for t in self.terms if t not in IMPACT_TERMS]
+        if unknown:
+            raise ValueError(f"terms must be registered impact terms, unknown: {unknown}")
+        if tuple(self.coefficients) != tuple(self.terms) or tuple(self.ci) != tuple(self.terms):
+            raise ValueError("coefficients and ci must have one entry per term, in order")
+        boot = np.asarray(self.boot_coefficients, dtype=float)
+        if boot.ndim != 2 or boot.shape[1] != len(self.terms):
+            raise ValueError(f"boot_coefficients must have shape (n_bootstrap, "
+                             f"{len(self.terms)}), was {boot.shape}")
+        if not 0.0 < self.level < 1.0:
+            raise ValueError(f"level must be in (0, 1), was {self.level!r}")
+
+    @property
+    def velocity_dependent(self) -> bool:
+        """True when the selected law depends on the impact speed."""
+        return any(t != CONSTANT_TERM for t in self.terms)
+
+    def predict(self, v) -> np.ndarray:
+        """Point estimate of r at speeds ``v`` (m/s); not clipped to [0, 1]."""
+        if not self.terms:
+            return np.full(np.shape(v), np.nan)
+        return _evaluate(self.terms, np.array([self.coefficients[t] for t in self.terms]), v)
+
+    def band(self, v_grid, level: float | None = None) -> tuple[np.ndarray, np.ndarray,
+                                                                np.ndarray]:
+        """Pointwise bootstrap band of r(v).
+
+        Parameters
+        ----------
+        v_grid : array_like
+            Speeds (m/s); meaningful inside :attr:`speed_range`.
+        level : float, optional
+            Coverage of the band (default :attr:`level`).
+
+        Returns
+        -------
+        lo, mid, hi : ndarray
+            Lower percentile, point estimate and upper percentile at each speed
+            (``lo``/``hi`` are NaN without bootstrap resamples).
+        """
+        level = self.level if level is None else float(level)
+        if not 0.0 < level < 1.0:
+            raise InputError(f"band level must be in (0, 1), was {level!r}")
+        v_grid = np.asarray(v_grid, dtype=float)
+        mid = self.predict(v_grid)
+        if self.boot_coefficients.shape[0] == 0 or not self.terms:
+            nan = np.full(v_grid.shape, np.nan)
+            return nan, mid, nan.copy()
+        curves = _evaluate(self.terms, self.boot_coefficients, v_grid)  # (..., n_boot)
+        q = 50.0 * (1.0 - level)
+        lo, hi = np.percentile(curves, [q, 100.0 - q], axis=-1)
+        return lo, mid, hi
+
+    def to_dict(self) -> dict:
+        """JSON-ready form (NaN becomes None)."""
+        cands = []
+        for row in self.candidates.to_dict("records"):
+            cands.append({k: (_num(v) if isinstance(v, (float, np.floating)) else
+                              (bool(v) if isinstance(v, (bool, np.bool_)) else
+                               (int(v) if isinstance(v, (int, np.integer)) else v)))
+                          for k, v in row.items()})
+        return {
+            "formula": self.formula, "kind": self.kind,
+            "law": None if self.law is None else self.law.to_dict(),
+            "terms": list(self.terms),
+            "coefficients": {t: {"value": _num(self.coefficients[t]),
+                                 "ci": [_num(self.ci[t][0]), _num(self.ci[t][1])]}
+                             for t in self.terms},
+            "fixed_intercept": bool(self.fixed_intercept),
+            "velocity_dependent": self.velocity_dependent,
+            "delta_aicc_vs_constant": _num(self.delta_aicc_vs_constant),
+            "p_value_vs_constant": _num(self.p_value_vs_constant),
+            "alternative": self.alternative,
+            "speed_range": [_num(self.speed_range[0]), _num(self.speed_range[1])],
+            "n": int(self.n), "n_dropped": int(self.n_dropped),
+            "n_outliers": int(self.n_outliers), "sigma": _num(self.sigma),
+            "support_frequency": _num(self.support_frequency),
+            "selection_frequency": {k: _num(f) for k, f in self.selection_frequency.items()},
+            "criterion": self.criterion, "level": float(self.level),
+            "n_bootstrap": int(self.boot_coefficients.shape[0]),
+            "warning": self.warning, "candidates": cands,
+        }

@@ -1,0 +1,351 @@
+"""Stage 5 in one call: :func:`discover` the flight law and the impact law per wall.
+
+Several recordings are pooled: each is analysed by :func:`vidiscover.analysis.analyze`
+(stages 1-4), then
+
+* **flight law** -- :func:`vidiscover.discovery.flight_law.discover_flight_law` on the
+  analyses (friction mu, inclination theta, other terms). When it finds friction
+  (``mu > 0``) different from the assumed one, the recordings are analysed again
+  with the identified mu (``refine_mu``): r depends strongly on the friction
+  correction of the flights (paper Table 2), and an r estimated with the wrong mu
+  carries a speed-dependent bias that the impact-law discovery would report as a law;
+* **impact law, per wall** -- the impacts whose r the analysis trusts (impact table
+  column ``r_used``) give one point ``(v, r)`` each, with ``v = |u_minus|`` the
+  relative pre-impact speed ``|z'-| = |w- - v_LO-|`` (m/s) and the standard error
+  ``sigma = r_rel_error * r``; the points of all recordings are pooled (different
+  clearances give different impact speeds) and :func:`discover_impact_law` selects
+  the sparsest adequate law, cross-validating over whole recordings (``groups``);
+* **flight residuals** (:meth:`DiscoveryResult.flight_residuals`) -- at every impact
+  between two free flights, the momentum balance of the weak form,
+  ``wbar_out - wbar_in - dw`` (m/s) with ``dw = -(m1/m2) dv`` from the pulse area,
+  before (straight flights, the nominal law ``y'' = 0``) and after subtracting the
+  tent integral of the discovered flight law along the straight-line ``z'(t)``.
+
+>>> from vidiscover import Effects, preset, record, simulate
+>>> fx = Effects.parse(["velocity_dependent_restitution=right=linear:0.95:0.12,left=0.3"])
+>>> recs = [record(simulate(preset("paper", b=b), fx, settle=5.0, duration=2.0),
+...                seed=1)[0] for b in (0.006, 0.009)]
+>>> res = discover(recs, n_bootstrap=20, flight=False)
+>>> res.impact_laws["right"].kind, res.impact_laws["left"].formula
+('linear', 'r = 0.3')
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from ..analysis import AnalysisResult, analyze
+from ..errors import InputError
+from ..recording import Recording
+from .impact_law import discover_impact_law
+from .impact_result import ImpactLawResult
+
+__all__ = ["DiscoveryResult", "discover", "SIDES", "IMPACT_DATA_COLUMNS"]
+
+#: The two walls, in the order of the paper's tables.
+SIDES = ("right", "left")
+#: Columns of :attr:`DiscoveryResult.impact_data` tables.
+IMPACT_DATA_COLUMNS = ("recording", "group", "t", "v", "r", "sigma")
+
+
+def _clean(value: Any) -> Any:
+    """JSON-ready copy: numpy scalars to Python, NaN/inf to None."""
+    if isinstance(value, Mapping):
+        return {str(k): _clean(v) for k, v in value.items()}
+    if isinstance(value, (list, tuple, np.ndarray)):
+        return [_clean(v) for v in (value.tolist() if isinstance(value, np.ndarray)
+                                    else value)]
+    if isinstance(value, (bool, np.bool_)):
+        return bool(value)
+    if isinstance(value, np.integer):
+        return int(value)
+    if isinstance(value, (float, np.floating)):
+        v = float(value)
+        return v if math.isfinite(v) else None
+    return value
+
+
+@dataclass(frozen=True, eq=False)
+class DiscoveryResult:
+    """Flight law and per-wall impact laws discovered from pooled recordings.
+
+    Attributes
+    ----------
+    recordings : tuple of str
+        Names of the recordings, in input order (``group`` k is the k-th).
+    analyses : tuple of AnalysisResult
+        Stage 1-4 results of each recording.
+    impact_data : Mapping[str, pandas.DataFrame]
+        Per wall, the pooled impacts used (:data:`IMPACT_DATA_COLUMNS`).
+    impact_laws : Mapping[str, ImpactLawResult]
+        Per wall, the discovered restitution law.
+    flight : FlightLawResult or None
+        The discovered flight law (None when not run or unavailable; see
+        ``warnings``).
+    mu : float
+        Friction coefficient assumed on input.
+    mu_impacts : float
+        Friction coefficient of the analyses the impact laws come from (the
+        identified one after ``refine_mu``).
+    warnings : tuple of str
+        Everything that limited the discovery.
+    """
+
+    recordings: tuple[str, ...]
+    analyses: tuple = field(repr=False)
+    impact_data: Mapping[str, pd.DataFrame] = field(repr=False)
+    impact_laws: Mapping[str, ImpactLawResult]
+    flight: Any
+    mu: float
+    mu_impacts: float
+    warnings: tuple[str, ...] = ()
+
+    def equations(self) -> list[str]:
+        """The discovered laws as text lines (flight law first)."""
+        lines = []
+        if self.flight is not None:
+            lines.append(f"flight: {self.flight.equation}   (mu = {self.flight.mu:.4g}, "
+                         f"theta = {self.flight.theta_deg:.4g} deg)")
+        else:
+            lines.append("flight: not identified")
+        for side in SIDES:
+            law = self.impact_laws[side]
+            rng = law.speed_range
+            where = (f"v = |z'-| in {rng[0]:.3g}-{rng[1]:.3g} m/s, n = {law.n}"
+                     if law.n else "no impacts")
+            lines.append(f"{side} wall: {law.formula}   ({where})")
+        return lines
+
+    def summary(self) -> dict:
+        """JSON-ready dict (DESIGN.md section 6 ``discover`` keys and more).
+
+        Keys: ``flight`` (``mu``, ``theta_deg``, ``terms``, ``equation``, intervals;
+        None when the flight law was not identified), ``impact_law`` {``right``,
+        ``left``} (``formula``, ``kind``, ``terms``, ``coefficients`` with ``ci``,
+        ``delta_aicc_vs_constant``, ``p_value_vs_constant``, ``speed_range``, ``n``,
+        ``candidates``, ...), ``equations``, ``recordings``, ``n_recordings``,
+        ``mu_assumed``, ``mu_impacts`` (mu of the analyses behind the impact laws),
+        ``warnings``. NaN becomes None.
+        """
+        return _clean({
+            "recordings": list(self.recordings),
+            "n_recordings": len(self.recordings),
+            "mu_assumed": self.mu,
+            "mu_impacts": self.mu_impacts,
+            "flight": None if self.flight is None else self.flight.to_dict(),
+            "impact_law": {side: self.impact_laws[side].to_dict() for side in SIDES},
+            "equations": self.equations(),
+            "warnings": list(self.warnings),
+        })
+
+    def flight_residuals(self) -> pd.DataFrame:
+        """Weak-form momentum residual at each impact, before and after the flight law.
+
+        Returns
+        -------
+        pandas.DataFrame
+            Columns ``recording``, ``t`` (s), ``before`` and ``after`` (m/s): at every
+            impact between two free flights, ``wbar_out - wbar_in - dw`` (nominal law:
+            straight flights), and the same minus ``sum_j c_j int phi f_j(z') dt``
+            over the two flights (``phi`` the tent peaking at the impact, ``z'`` along
+            the straight flights). ``after`` equals ``before`` without a flight law.
+        """
+        frames = [_residuals(a, self.flight) for a in self.analyses]
+        if not frames:
+            return pd.DataFrame(columns=["recording", "t", "before", "after"])
+        return pd.concat(frames, ignore_index=True)
+
+
+# --------------------------------------------------------------------- residuals
+def _residuals(analysis: AnalysisResult, flight) -> pd.DataFrame:
+    rec = getattr(analysis, "_recording", None)
+    m1, m2 = (rec.meta.m1, rec.meta.m2) if rec is not None else (4.168, 0.032)
+    fl = analysis.reconstruction.flights
+    dv = np.asarray(analysis.detection.dv, dtype=float)
+    recon = analysis.reconstruction
+    funcs = []
+    if flight is not None:
+        try:
+            from .flight_law import FLIGHT_TERMS
+        except ImportError:  # pragma: no cover - depends on the flight-law module
+            FLIGHT_TERMS = {}
+        funcs = [(float(c), FLIGHT_TERMS[t]) for t, c in
+                 zip(flight.terms, flight.coefficients, strict=True) if t in FLIGHT_TERMS]
+    i_start = fl["i_start"].to_numpy()
+    i_end = fl["i_end"].to_numpy()
+    free = (fl["kind"] == "free").to_numpy()
+    t0, t1 = fl["t_start"].to_numpy(), fl["t_end"].to_numpy()
+    wbar = ((fl["y_end"] - fl["y_start"]) / (fl["t_end"] - fl["t_start"])).to_numpy()
+    rows = []
+    for k in range(1, len(fl)):
+        if not (free[k - 1] and free[k] and i_end[k - 1] == i_start[k]):
+            continue
+        i = int(i_start[k])
+        before = wbar[k] - wbar[k - 1] + (m1 / m2) * dv[i]
+        rhs = 0.0
+        for j, phi_up in ((k - 1, True), (k, False)):
+            sel = (recon.t >= t0[j]) & (recon.t <= t1[j])
+            ts = recon.t[sel]
+            if ts.size < 2 or not funcs:
+                continue
+            zd = wbar[j] - recon.v[sel]
+            phi = (ts - t0[j]) / (t1[j] - t0[j])
+            phi = phi if phi_up else 1.0 - phi
+            rhs += sum(c * np.trapezoid(phi * f(zd), ts) for c, f in funcs)
+        rows.append((analysis.name, float(analysis.detection.t[i]), before, before - rhs))
+    return pd.DataFrame(rows, columns=["recording", "t", "before", "after"])
+
+
+# --------------------------------------------------------------------- pipeline
+def _as_items(items) -> list:
+    if isinstance(items, (str, os.PathLike, Recording, AnalysisResult)):
+        return [items]
+    try:
+        out = list(items)
+    except TypeError:
+        raise InputError(f"discover needs recordings (paths, Recording or AnalysisResult "
+                         f"objects), was {type(items).__name__}") from None
+    if not out:
+        raise InputError("discover needs at least one recording; pass one or more files")
+    return out
+
+
+def _analysis_of(item, mu: float, threshold: float, meta) -> AnalysisResult:
+    if isinstance(item, AnalysisResult):
+        return item
+    if isinstance(item, (str, os.PathLike)):
+        from ..io import read_recording
+
+        item = read_recording(Path(item), meta=meta)
+    if not isinstance(item, Recording):
+        raise InputError(f"discover: each input must be a path, a Recording or an "
+                         f"AnalysisResult, got {type(item).__name__}")
+    return analyze(item, mu=mu, threshold=threshold, n_boot=0)
+
+
+def _pool(analyses: Sequence[AnalysisResult], side: str) -> pd.DataFrame:
+    frames = []
+    for k, a in enumerate(analyses):
+        it = a.impact_table
+        sel = (it["r_used"].to_numpy(dtype=bool) & (it["side"] == side).to_numpy())
+        r = it["r"].to_numpy(dtype=float)[sel]
+        frames.append(pd.DataFrame({
+            "recording": a.name, "group": k, "t": it["t"].to_numpy(dtype=float)[sel],
+            "v": np.abs(it["u_minus"].to_numpy(dtype=float)[sel]), "r": r,
+            "sigma": it["r_rel_error"].to_numpy(dtype=float)[sel] * np.abs(r)}))
+    return pd.concat(frames, ignore_index=True)[list(IMPACT_DATA_COLUMNS)]
+
+
+def _flight_law(analyses, seed: int, flight_kws: Mapping | None):
+    """(FlightLawResult or None, warning or None)."""
+    try:
+        from .flight_law import discover_flight_law
+    except ImportError as err:
+        return None, f"flight-law discovery unavailable ({err}); flight law not identified"
+    try:
+        return discover_flight_law(list(analyses), seed=seed, **dict(flight_kws or {})), None
+    except InputError as err:
+        return None, f"flight law not identified: {err}"
+
+
+def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_bootstrap: int = 200,
+             criterion: str = "aicc", terms: Sequence[str] | None = None,
+             threshold: float = 5.5, meta=None, flight: bool = True,
+             flight_kws: Mapping | None = None, impact_kws: Mapping | None = None,
+             refine_mu: bool = True,
+             progress: bool = False) -> DiscoveryResult:
+    """Discover the flight law and the impact law per wall from one or more recordings.
+
+    Parameters
+    ----------
+    recordings : path, Recording, AnalysisResult or a sequence of them
+        The recordings to pool (e.g. one per clearance). Paths are read with
+        :func:`vidiscover.io.read_recording`; recordings are analysed with
+        :func:`vidiscover.analysis.analyze`; analyses are used as they are.
+    mu : float, optional
+        Friction coefficient assumed by the analyses (paper eq. 8).
+    seed : int, optional
+        Seed of every bootstrap and cross-validation split.
+    n_bootstrap : int, optional
+        Bootstrap resamples of the impact laws (intervals, band, selection
+        frequencies).
+    criterion : {"aicc", "cv"}, optional
+        Impact-law selection rule (see :func:`discover_impact_law`).
+    terms : sequence of str, optional
+        Impact-law candidate terms (default: the whole registry).
+    threshold : float, optional
+        Impact detection threshold of the analyses.
+    meta : path-like, dict or Metadata, optional
+        Metadata for paths without a sidecar JSON (applied to every path).
+    flight : bool, optional
+        Run the flight-law discovery.
+    flight_kws : Mapping, optional
+        Extra keyword arguments of ``discover_flight_law``.
+    impact_kws : Mapping, optional
+        Extra keyword arguments of :func:`discover_impact_law` (e.g.
+        ``min_effect``, ``aicc_window``, ``outlier_z``, ``max_terms``).
+    refine_mu : bool, optional
+        When the flight law identifies friction ``mu_id > 0`` that differs from
+        ``mu`` by more than 0.005, analyse the recordings again with ``mu_id``
+        before the impact-law discovery.
+    progress : bool, optional
+        Show a tqdm progress bar over the recordings.
+
+    Returns
+    -------
+    DiscoveryResult
+
+    Raises
+    ------
+    InputError
+        Unreadable recordings, bad options.
+    """
+    if not (isinstance(mu, (int, float)) and math.isfinite(mu) and 0 <= mu <= 2):
+        raise InputError(f"mu must be in [0, 2] (friction coefficient), was {mu!r}")
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
+        raise InputError(f"seed must be an integer >= 0, was {seed!r}")
+    for name, kws in (("flight_kws", flight_kws), ("impact_kws", impact_kws)):
+        if kws is not None and not isinstance(kws, Mapping):
+            raise InputError(f"{name} must be a mapping of keyword arguments, "
+                             f"was {type(kws).__name__}")
+    items = _as_items(recordings)
+    if progress:
+        from tqdm import tqdm
+
+        items = tqdm(items, desc="analyse", unit="rec")
+    analyses = tuple(_analysis_of(it, mu, threshold, meta) for it in items)
+    warnings = [f"{a.name}: {w}" for a in analyses for w in a.warnings]
+    flight_result = None
+    if flight:
+        flight_result, note = _flight_law(analyses, int(seed), flight_kws)
+        if note:
+            warnings.append(note)
+    mu_impacts = float(mu)
+    if refine_mu and flight_result is not None:
+        mu_id = float(flight_result.mu)
+        recs = [getattr(a, "_recording", None) for a in analyses]
+        if mu_id > 0 and abs(mu_id - mu) > 0.005 and all(r is not None for r in recs):
+            mu_impacts = min(mu_id, 2.0)
+            analyses = tuple(analyze(r, mu=mu_impacts, threshold=threshold, n_boot=0)
+                             for r in recs)
+    data, laws = {}, {}
+    for side in SIDES:
+        data[side] = _pool(analyses, side)
+        d = data[side]
+        laws[side] = discover_impact_law(d["v"], d["r"], sigma=d["sigma"], groups=d["group"],
+                                         seed=int(seed), n_bootstrap=n_bootstrap,
+                                         criterion=criterion, terms=terms,
+                                         **dict(impact_kws or {}))
+        if laws[side].warning:
+            warnings.append(f"{side} wall: {laws[side].warning}")
+    return DiscoveryResult(recordings=tuple(a.name for a in analyses), analyses=analyses,
+                           impact_data=data, impact_laws=laws, flight=flight_result,
+                           mu=float(mu), mu_impacts=mu_impacts, warnings=tuple(warnings))
