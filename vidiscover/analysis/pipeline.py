@@ -73,6 +73,8 @@ class AnalysisResult:
     regime_label : str or None
         Regime label (None until a classifier is attached).
     warnings : tuple of str
+    theta_deg : float
+        Inclination assumed (deg; from a flight law, else 0).
     """
 
     name: str
@@ -87,6 +89,12 @@ class AnalysisResult:
     regime_label: str | None = None
     warnings: tuple = ()
     _recording: object = field(default=None, repr=False)
+    theta_deg: float = 0.0
+
+    @property
+    def recording(self):
+        """The analysed :class:`~vidiscover.recording.Recording` (None if not kept)."""
+        return self._recording
 
     def summary(self) -> dict:
         """JSON-ready nested dict (DESIGN.md section 6 ``analyze`` keys and more).
@@ -104,6 +112,7 @@ class AnalysisResult:
             "recording": self.name,
             "b": self.b,
             "mu": self.mu,
+            "theta_deg": self.theta_deg,
             "duration": det.duration,
             "sample_rate": det.sample_rate,
             "forcing": {"frequency": self.forcing.frequency,
@@ -157,7 +166,7 @@ class AnalysisResult:
 
 
 def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 5.5,
-            n_boot: int = 1000, seed: int = 0) -> AnalysisResult:
+            n_boot: int = 1000, seed: int = 0, flight_law=None) -> AnalysisResult:
     """Run stages 1-4 on a recording: impacts, reconstruction, restitution, return map.
 
     Parameters
@@ -174,6 +183,12 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 
         Bootstrap resamples of the restitution confidence intervals.
     seed : int
         Seed of the bootstrap.
+    flight_law : FlightLawResult or (mu, theta_deg), optional
+        An identified flight law (:func:`vidiscover.discovery.discover_flight_law`)
+        used instead of ``mu``: its friction reconstructs the flights, and its
+        inclination corrects the ball velocity at every impact of a free flight
+        (exactly: the tilt is absorbed by a change of frame). The plotted ball
+        path between impacts stays the friction-only one.
 
     Returns
     -------
@@ -185,11 +200,16 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 
         On unusable input (too short, bad time axis, no finite acceleration or
         displacement, impossible parameters).
     """
+    theta_deg = 0.0
+    if flight_law is not None:
+        mu, theta_deg = _law_mu_theta(flight_law)
     if not (isinstance(mu, (int, float)) and math.isfinite(mu) and 0 <= mu <= 2):
         raise InputError(f"mu must be in [0, 2] (friction coefficient), was {mu!r}")
     b = float(rec.meta.b if b is None else b)
     det = detect_impacts(rec, threshold=threshold, mu=mu, b=b)     # checks the recording
     recon = reconstruct(det, rec, b=b, mu=mu)
+    if theta_deg != 0.0:
+        recon = _tilted(recon, det, rec, mu, theta_deg)
     rest = estimate_restitution(recon, det, n_boot=n_boot, seed=seed)
     forcing = fit_forcing(rec.t, rec.xe, rec.meta.frequency)
     rm = return_map(det.t, det.side, forcing.period)
@@ -201,6 +221,8 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 
     if forcing.source != "xe":
         warnings.append("base displacement 'xe' has no usable sine: cycles are cut with the "
                         "metadata frequency and phase 0")
+    if flight_law is not None:
+        warnings.append(f"flight law used: mu = {mu:.4g}, theta = {theta_deg:.4g} deg")
     for w in (rest.right, rest.left):
         if w.warn_slow:
             warnings.append(f"{w.side} wall: the ball is too slow for the friction "
@@ -209,4 +231,48 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 
     return AnalysisResult(name=rec.name, b=b, mu=float(mu), forcing=forcing, detection=det,
                           reconstruction=recon, restitution=rest, returnmap=rm,
                           features=features, regime_label=None, warnings=tuple(warnings),
-                          _recording=rec)
+                          _recording=rec, theta_deg=float(theta_deg))
+
+
+def _law_mu_theta(law) -> tuple[float, float]:
+    """``(mu, theta_deg)`` of a flight law or of a pair of numbers."""
+    from ..discovery.flight_law import FlightLawResult, flight_law_mu_theta
+
+    if isinstance(law, FlightLawResult):
+        return flight_law_mu_theta(law)
+    try:
+        mu, theta = (float(v) for v in law)
+    except (TypeError, ValueError):
+        raise InputError("flight_law must be a FlightLawResult or a pair (mu, theta_deg), "
+                         f"was {law!r}") from None
+    if not (math.isfinite(theta) and abs(theta) < 90):
+        raise InputError(f"flight_law theta_deg must be in (-90, 90) degrees, was {theta!r}")
+    return max(mu, 0.0), theta
+
+
+def _tilted(recon: Reconstruction, det: ImpactDetection, rec, mu: float,
+            theta_deg: float) -> Reconstruction:
+    """``recon`` with the free-flight ball velocities solved under inclination."""
+    from types import SimpleNamespace
+
+    from ..discovery.flight_law import reconstruct_with_law
+
+    if recon.n_flights == 0:
+        return recon
+    view = SimpleNamespace(_recording=rec, reconstruction=recon, detection=det,
+                           name=rec.name)
+    sol = reconstruct_with_law(view, (mu, theta_deg))
+    fc = {k: np.array(v, copy=True) for k, v in recon.flight_columns.items()}
+    ic = {k: np.array(v, copy=True) for k, v in recon.impact_columns.items()}
+    k = sol["flight"]
+    fc["w_start"][k] = sol["w_start"]
+    fc["w_end"][k] = sol["w_end"]
+    fc["zd_start"] = fc["w_start"] - fc["v_start"]
+    fc["zd_end"] = fc["w_end"] - fc["v_end"]
+    ic["w_plus"][fc["i_start"][k]] = sol["w_start"]
+    ic["w_minus"][fc["i_end"][k]] = sol["w_end"]
+    ic["u_minus"] = ic["w_minus"] - ic["v_minus"]
+    ic["u_plus"] = ic["w_plus"] - ic["v_plus"]
+    from dataclasses import replace
+
+    return replace(recon, impact_columns=ic, flight_columns=fc)

@@ -66,9 +66,40 @@ def _load(path: Path, meta: Path | None):
     return rec, truth
 
 
+def read_flight_law(path: Path) -> tuple[float, float]:
+    """``(mu, theta_deg)`` from a ``discovery.json`` written by ``vidiscover discover``.
+
+    Raises
+    ------
+    InputError
+        If the file is missing, not JSON, or has no identified flight law.
+    """
+    import json
+
+    path = Path(path)
+    try:
+        doc = json.loads(path.read_text())
+    except FileNotFoundError:
+        raise InputError(f"--flight-law {path}: no such file; pass the discovery.json "
+                         "written by `vidiscover discover`") from None
+    except (OSError, ValueError) as err:
+        raise InputError(f"--flight-law {path}: not a readable JSON file ({err}); pass the "
+                         "discovery.json written by `vidiscover discover`") from None
+    fl = doc.get("flight") if isinstance(doc, dict) else None
+    try:
+        mu, theta = float(fl["mu"]), float(fl["theta_deg"])
+    except (TypeError, KeyError, ValueError):
+        raise InputError(f"--flight-law {path}: has no identified flight law (flight.mu, "
+                         "flight.theta_deg); run `vidiscover discover` without "
+                         "--no-flight") from None
+    if not (math.isfinite(mu) and math.isfinite(theta)):
+        raise InputError(f"--flight-law {path}: flight.mu/theta_deg are not finite numbers")
+    return max(mu, 0.0), theta
+
+
 def run_analyze(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
                 figures: bool = True, seed: int = 0, progress: bool = False,
-                model=None) -> list[dict]:
+                model=None, theta_deg: float = 0.0) -> list[dict]:
     """Analyse recordings and write their reports (the ``analyze`` command, in-process).
 
     Parameters
@@ -91,6 +122,9 @@ def run_analyze(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
     model : RegimeModel, optional
         Regime classifier (anything with ``classify_analysis(result)`` returning
         ``label``, ``proba``, ``warnings``); None leaves ``regime.label`` null.
+    theta_deg : float
+        Inclination of the rig assumed for the flights (deg; > 0 pulls the ball
+        towards the right wall).
 
     Returns
     -------
@@ -110,6 +144,9 @@ def run_analyze(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
     from ..report import attach_regime, write_analysis, write_index
 
     mu = _check_mu(mu)
+    if not (math.isfinite(theta_deg) and abs(theta_deg) < 90):
+        raise InputError(f"--theta must be in (-90, 90) degrees, was {theta_deg!r}")
+    law = (mu, float(theta_deg)) if theta_deg else None
     paths = [Path(p) for p in paths]
     if not paths:
         raise InputError("no recording given; pass one or more recording files")
@@ -119,7 +156,8 @@ def run_analyze(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
     loaded = [_load(p, meta) for p in paths]          # check every input before writing
 
     def one(rec, truth, target: Path) -> dict:
-        result, regime = attach_regime(analyze_recording(rec, mu=mu, seed=seed), model)
+        result, regime = attach_regime(analyze_recording(rec, mu=mu, seed=seed,
+                                                         flight_law=law), model)
         written = write_analysis(result, target, figures=figures, truth=truth,
                                  regime=regime)
         return {**written["summary"], "out": str(target), "files": written["files"]}
@@ -184,6 +222,11 @@ def human_lines(doc: dict) -> list[str]:
               help="Output directory (one subdirectory per recording when several).")
 @click.option("--mu", type=float, default=0.0, show_default=True,
               help="Friction coefficient assumed between ball and LO (paper eq. 8).")
+@click.option("--theta", type=float, default=0.0, show_default=True,
+              help="Inclination of the rig (deg, > 0 pulls the ball right).")
+@click.option("--flight-law", type=click.Path(path_type=Path), default=None,
+              help="discovery.json from `vidiscover discover`: use its identified mu and "
+                   "theta instead of --mu/--theta.")
 @click.option("--meta", type=click.Path(path_type=Path), default=None,
               help="Metadata JSON, if not beside the recording (rec.json).")
 @click.option("--model", "model_path", type=click.Path(path_type=Path), default=None,
@@ -196,7 +239,8 @@ def human_lines(doc: dict) -> list[str]:
               help="Print one JSON document: the summary (one recording) or a list of "
                    "summaries (several).")
 @handle_errors
-def analyze(recordings, out, mu, meta, model_path, no_figures, seed, as_json):
+def analyze(recordings, out, mu, theta, flight_law, meta, model_path, no_figures, seed,
+            as_json):
     """Find impacts, reconstruct the ball, estimate restitution per wall, report.
 
     RECORDINGS are CSV/Parquet/NPZ files with columns t, x, a, xe and a metadata
@@ -204,6 +248,8 @@ def analyze(recordings, out, mu, meta, model_path, no_figures, seed, as_json):
     and a self-contained report.html; a simulated recording's ground truth
     (rec.truth.json) is overlaid when present.
     """
+    if flight_law is not None:
+        mu, theta = read_flight_law(flight_law)
     _check_mu(mu)
     if model_path is not None:
         from ..regimes.classifier import load_model
@@ -214,7 +260,8 @@ def analyze(recordings, out, mu, meta, model_path, no_figures, seed, as_json):
 
         model = default_regime_model()
     docs = run_analyze(recordings, out, mu=mu, meta=meta, figures=not no_figures,
-                       seed=seed, progress=not as_json and len(recordings) > 1, model=model)
+                       seed=seed, theta_deg=theta,
+                       progress=not as_json and len(recordings) > 1, model=model)
     human = [line for d in docs for line in human_lines(d)]
     if len(docs) > 1:
         human.append(f"index: {Path(out) / 'index.html'}")

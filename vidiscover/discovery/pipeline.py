@@ -5,8 +5,9 @@ Several recordings are pooled: each is analysed by :func:`vidiscover.analysis.an
 
 * **flight law** -- :func:`vidiscover.discovery.flight_law.discover_flight_law` on the
   analyses (friction mu, inclination theta, other terms). When it finds friction
-  (``mu > 0``) different from the assumed one, the recordings are analysed again
-  with the identified mu (``refine_mu``): r depends strongly on the friction
+  (``mu > 0``) different from the assumed one, or an inclination (|theta| >= 0.05
+  deg), the recordings are analysed again with the identified law (``refine_mu``,
+  ``analyze(..., flight_law=...)``): r depends strongly on the friction
   correction of the flights (paper Table 2), and an r estimated with the wrong mu
   carries a speed-dependent bias that the impact-law discovery would report as a law;
 * **impact law, per wall** -- the impacts whose r the analysis trusts (impact table
@@ -294,8 +295,9 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_bootstrap: int = 2
         ``min_effect``, ``aicc_window``, ``outlier_z``, ``max_terms``).
     refine_mu : bool, optional
         When the flight law identifies friction ``mu_id > 0`` that differs from
-        ``mu`` by more than 0.005, analyse the recordings again with ``mu_id``
-        before the impact-law discovery.
+        ``mu`` by more than 0.005, or an inclination of at least 0.05 deg, analyse
+        the recordings again with the identified law before the impact-law
+        discovery.
     progress : bool, optional
         Show a tqdm progress bar over the recordings.
 
@@ -331,11 +333,14 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_bootstrap: int = 2
     mu_impacts = float(mu)
     if refine_mu and flight_result is not None:
         mu_id = float(flight_result.mu)
+        theta_id = float(flight_result.theta_deg)
+        theta_id = theta_id if math.isfinite(theta_id) and abs(theta_id) >= 0.05 else 0.0
         recs = [getattr(a, "_recording", None) for a in analyses]
-        if mu_id > 0 and abs(mu_id - mu) > 0.005 and all(r is not None for r in recs):
-            mu_impacts = min(mu_id, 2.0)
-            analyses = tuple(analyze(r, mu=mu_impacts, threshold=threshold, n_boot=0)
-                             for r in recs)
+        if (math.isfinite(mu_id) and all(r is not None for r in recs)
+                and ((mu_id > 0 and abs(mu_id - mu) > 0.005) or theta_id)):
+            mu_impacts = min(max(mu_id, 0.0), 2.0)
+            analyses = tuple(analyze(r, threshold=threshold, n_boot=0,
+                                     flight_law=(mu_impacts, theta_id)) for r in recs)
     data, laws = {}, {}
     for side in SIDES:
         data[side] = _pool(analyses, side)
