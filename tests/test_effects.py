@@ -72,3 +72,15 @@ def test_restitution_laws(spec, v, expected):
     assert law(np.array([v, v])) == pytest.approx([expected, expected])
     assert RestitutionLaw.parse(law.spec) == law
     assert law.formula.startswith("r = ")
+
+
+def test_effects_pickle_round_trip_for_worker_processes():
+    import pickle
+
+    from vidiscover.effects import Effects
+
+    eff = Effects.parse(["coulomb_friction=0.3", "asymmetric_restitution=0.88,0.2",
+                         "velocity_dependent_restitution=right=linear:0.9:0.1"])
+    back = pickle.loads(pickle.dumps(eff))
+    assert back.to_dict() == eff.to_dict()
+    assert back.mu == eff.mu

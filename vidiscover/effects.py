@@ -209,6 +209,11 @@ class Effects:
         """JSON-ready ``{name: {param: value}}``."""
         return {k: dict(v) for k, v in self.active.items()}
 
+    def __reduce__(self):
+        # read-only mapping proxies do not pickle; rebuild from the plain dict so
+        # effects travel to joblib and Dask workers
+        return (Effects.from_dict, (self.to_dict(),))
+
     def with_effect(self, name: str, **params: Any) -> Effects:
         """A copy with ``name`` switched on (or its parameters replaced)."""
         active = self.to_dict()
