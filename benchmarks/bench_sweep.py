@@ -1,0 +1,138 @@
+"""1000-point b sweep (simulate + record + label + analyse each) vs the 60 s target.
+
+DESIGN.md section 8: a 1000-point b sweep <= 60 s on 2 cores. Runs the same sweep
+(paper preset, b = 3-30 mm, settle 10 s, record 5.12 s, no bootstrap) side by side:
+
+- serial (``n_jobs=1``, one process, no pool),
+- joblib, 2 loky worker processes (the default backend),
+- Dask ``distributed.LocalCluster`` on loopback, 2 worker processes x 1 thread,
+
+prints the wall-clock of each (pool/cluster start included and shown apart), checks
+that the three tables are identical, and times the stages of one point (simulate,
+sensor record, ground-truth label, analyse) on a sample to show where the time goes.
+The machine's load average is printed too: on a shared machine it matters.
+
+Usage: ``python benchmarks/bench_sweep.py [--n 1000] [--skip-serial] [--skip-dask]``
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+
+import numpy as np
+import pandas as pd
+
+TARGET_S = 60.0
+
+
+def _stage_times(values, settle, duration, sample):
+    """Median per-point time of each stage over ``sample`` points (serial)."""
+    from vidiscover import preset
+    from vidiscover.analysis import analyze
+    from vidiscover.regimes.labels import label_simulation
+    from vidiscover.sensors import SensorConfig, record
+    from vidiscover.simulation import simulate
+
+    stages = {"simulate": [], "record": [], "label": [], "analyze": []}
+    for b in np.asarray(values)[np.linspace(0, len(values) - 1, sample).astype(int)]:
+        t0 = time.perf_counter()
+        res = simulate(preset("paper", b=float(b)), settle=settle, duration=duration)
+        t1 = time.perf_counter()
+        rec, _ = record(res, SensorConfig(), seed=0)
+        t2 = time.perf_counter()
+        label_simulation(res)
+        t3 = time.perf_counter()
+        analyze(rec, n_boot=0)
+        t4 = time.perf_counter()
+        for k, dt in zip(stages, (t1 - t0, t2 - t1, t3 - t2, t4 - t3)):
+            stages[k].append(dt)
+    return {k: float(np.mean(v)) for k, v in stages.items()}
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--n", type=int, default=1000, help="number of sweep points")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--settle", type=float, default=10.0)
+    ap.add_argument("--duration", type=float, default=5.12)
+    ap.add_argument("--sample", type=int, default=40, help="points timed stage by stage")
+    ap.add_argument("--skip-serial", action="store_true")
+    ap.add_argument("--skip-dask", action="store_true")
+    args = ap.parse_args()
+
+    from vidiscover.sweep import sweep
+
+    values = np.linspace(0.003, 0.03, args.n)
+    kw = dict(settle=args.settle, duration=args.duration, seed=0, progress=False)
+    print(f"machine: {platform.platform()}, {os.cpu_count()} cpus, python "
+          f"{platform.python_version()}; load average {os.getloadavg()[0]:.2f} (1 min)")
+    print(f"sweep: b = 3-30 mm, {args.n} points, settle {args.settle:g} s + record "
+          f"{args.duration:g} s each, analyze(n_boot=0); target <= {TARGET_S:g} s on "
+          f"{args.workers} cores\n")
+
+    _stage_times(values[:1], args.settle, args.duration, 1)  # imports, first calls
+    stages = _stage_times(values, args.settle, args.duration, args.sample)
+    total = sum(stages.values())
+    print(f"per point, serial (mean of {args.sample} points across the range):")
+    for k, v in stages.items():
+        print(f"  {k:<9} {1e3 * v:7.1f} ms  ({100 * v / total:4.1f} %)")
+    print(f"  {'total':<9} {1e3 * total:7.1f} ms -> {args.n} points ideal on "
+          f"{args.workers} cores: {args.n * total / args.workers:.1f} s\n")
+
+    results, times = {}, {}
+    if not args.skip_serial:
+        t, c = time.perf_counter(), time.process_time()
+        results["serial"] = sweep("b", values, n_jobs=1, **kw)
+        times["serial"] = (time.perf_counter() - t, 0.0)
+        cpu = time.process_time() - c
+        print(f"serial: {cpu:.1f} CPU-s for {args.n} points ({1e3 * cpu / args.n:.1f} ms "
+              f"CPU per point) -> {cpu / args.workers:.1f} s of work per core on "
+              f"{args.workers} idle cores\n")
+
+    t = time.perf_counter()
+    results["joblib"] = sweep("b", values, n_jobs=args.workers, **kw)
+    times["joblib"] = (time.perf_counter() - t, 0.0)   # pool start is inside
+
+    if not args.skip_dask:
+        import distributed
+
+        t = time.perf_counter()
+        with distributed.LocalCluster(n_workers=args.workers, threads_per_worker=1,
+                                      processes=True, host="127.0.0.1",
+                                      dashboard_address=None) as lc, \
+                distributed.Client(lc) as client:
+            start = time.perf_counter() - t
+            t = time.perf_counter()
+            results["dask"] = sweep("b", values, scheduler=client, **kw)
+            times["dask"] = (time.perf_counter() - t, start)
+
+    print(f"{'backend':<8} {'wall (s)':>9} {'start (s)':>10} {'per point':>10} "
+          f"{'vs target':>10}")
+    for name, (wall, start) in times.items():
+        print(f"{name:<8} {wall:9.1f} {start:10.1f} {1e3 * wall / args.n:8.1f}ms "
+              f"{wall / TARGET_S:9.2f}x")
+    if "serial" in times:
+        for name in ("joblib", "dask"):
+            if name in times:
+                print(f"speed-up {name} vs serial: {times['serial'][0] / times[name][0]:.2f}x")
+    ref_name = next(iter(results))
+    for name, df in results.items():
+        if name == ref_name:
+            continue
+        try:
+            pd.testing.assert_frame_equal(df, results[ref_name], check_exact=True)
+            same = "identical"
+        except AssertionError as err:
+            same = f"DIFFERENT: {str(err).splitlines()[0]}"
+        print(f"rows {name} vs {ref_name}: {same}")
+    labels = results[ref_name]["label"].value_counts()
+    print("labels: " + ", ".join(f"{k} {v}" for k, v in labels.items()))
+    print(f"load average at the end: {os.getloadavg()[0]:.2f} (1 min)")
+
+
+if __name__ == "__main__":
+    main()

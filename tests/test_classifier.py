@@ -1,0 +1,264 @@
+"""Regime features, the regime classifier, its rule baseline and its model files."""
+
+import math
+
+import numpy as np
+import pandas as pd
+import pytest
+from sklearn.utils.estimator_checks import parametrize_with_checks
+from threadpoolctl import threadpool_limits
+
+from vidiscover import Effects, preset
+from vidiscover.analysis import FEATURES, FeatureContext, Forcing, return_map
+from vidiscover.analysis.returnmap import compute_features
+from vidiscover.errors import InputError
+from vidiscover.regimes import LABELS
+from vidiscover.regimes.classifier import (
+    TRUSTED_TYPES,
+    RegimeClassifier,
+    RuleBaseline,
+    evaluate,
+    fit_model,
+    load_default_model,
+    load_model,
+    save_model,
+)
+from vidiscover.regimes.dataset import PARAM_RANGES, draw_cases, generate
+from vidiscover.regimes.features import REGIME_FEATURES
+from vidiscover.workflows import simulate_to_memory
+
+T = 0.125
+
+
+@pytest.fixture(autouse=True)
+def _one_thread():
+    """The machine is shared: keep OpenMP (gradient boosting) to one thread."""
+    with threadpool_limits(1):
+        yield
+
+
+# --------------------------------------------------------------------------- features
+def _ctx(t, side, dv=None, x=None, duration=5.12):
+    t = np.asarray(t, dtype=float)
+    side = np.asarray(side)
+    dv = np.where(side == "right", 0.01, -0.005) if dv is None else np.asarray(dv, float)
+    ts = np.arange(int(duration * 6400)) / 6400
+    x = 0.005 * np.sin(2 * np.pi * 8 * ts) if x is None else x(ts)
+    return FeatureContext(t=t, side=side, dv=dv, t_start=0.0, t_end=duration,
+                          forcing=Forcing(8.0, 5e-4, 0.0), ts=ts, x=x,
+                          returnmap=return_map(t, side, T))
+
+
+def _locked(n_cycles=40, lag=0.03):
+    t = np.sort(np.r_[np.arange(n_cycles) * T + 0.01, np.arange(n_cycles) * T + 0.01 + lag])
+    return t, np.array(["right", "left"] * n_cycles)
+
+
+def test_regime_features_are_registered():
+    assert set(REGIME_FEATURES) <= set(FEATURES)
+
+
+@pytest.mark.parametrize("case", ["none", "one", "two", "regular", "random"])
+def test_every_feature_is_a_float_in_every_case(case):
+    rng = np.random.default_rng(3)
+    t, side = {"none": ([], []), "one": ([1.0], ["left"]),
+               "two": ([1.0, 1.05], ["left", "right"]), "regular": _locked(),
+               "random": (np.sort(rng.uniform(0, 5.12, 60)),
+                          rng.choice(["left", "right"], 60))}[case]
+    f = compute_features(_ctx(t, side))
+    assert set(f) == set(FEATURES)
+    assert all(isinstance(v, float) for v in f.values())
+    if case in ("regular", "random"):
+        assert all(math.isfinite(v) for v in f.values())
+
+
+def test_locked_two_impacts_per_cycle():
+    f = compute_features(_ctx(*_locked()))
+    assert f["phase_coherence"] == pytest.approx(1.0)
+    assert f["one_per_cycle_share"] == 0.0 and f["multi_per_cycle_share"] == 0.0
+    assert f["count_std"] == 0.0 and f["modal_count_share"] == 1.0
+    assert f["quiet_run"] == 0.0 and f["side_run"] == 1.0
+    assert f["dt_min"] == pytest.approx(0.03 / T) and f["dt_max"] == pytest.approx(1 - 0.03 / T)
+    assert f["returnmap_top_share"] == 1.0
+    assert f["dv_side_ratio"] == pytest.approx(math.log(2))
+    # a pure sine LO response: periodic with period 1, no stroboscopic spread
+    assert f["waveform_period"] == 1.0 and f["waveform_period_error"] < 1e-9
+    assert f["strobe_dispersion"] < 1e-9 and f["envelope_cv"] < 1e-9
+
+
+def test_random_impacts_are_not_locked():
+    rng = np.random.default_rng(0)
+    t = np.sort(rng.uniform(0, 5.12, 80))
+    f = compute_features(_ctx(t, rng.choice(["left", "right"], 80)))
+    assert f["phase_coherence"] < 0.4
+    assert f["returnmap_cluster_density"] > 0.5 > compute_features(
+        _ctx(*_locked()))["returnmap_cluster_density"]
+
+
+def test_bursts_and_modulation():
+    # impacts in 5 cycles out of 10, an envelope modulated at 0.8 Hz, period-2 waveform
+    cyc = np.arange(40)
+    t = (cyc[(cyc // 5) % 2 == 0] * T + 0.02)
+    f = compute_features(_ctx(t, np.array(["right"] * t.size), x=lambda s: (
+        0.005 * (1 + 0.5 * np.sin(2 * np.pi * 0.8 * s)) * np.sin(2 * np.pi * 8 * s))))
+    assert f["quiet_run"] == pytest.approx(5 / 40)
+    assert f["side_run"] == t.size
+    assert f["envelope_cv"] > 0.2 and f["strobe_dispersion"] < 1e-9
+    assert f["waveform_period"] == 0.0            # not periodic within 4 cycles
+    sub = compute_features(_ctx(*_locked(), x=lambda s: 0.005 * np.sin(2 * np.pi * 8 * s)
+                                + 0.002 * np.cos(2 * np.pi * 4 * s)))
+    assert sub["waveform_period"] == 2.0 and sub["strobe_dispersion"] > 0.1
+
+
+# --------------------------------------------------------------------------- estimator
+@parametrize_with_checks([RegimeClassifier(max_iter=10)])
+def test_sklearn_estimator_checks(estimator, check):
+    check(estimator)
+
+
+def test_bad_hyperparameters_fail_in_fit():
+    X, y = np.random.default_rng(0).normal(size=(20, 2)), np.array(["a", "b"] * 10)
+    with pytest.raises(ValueError, match="calibration must be"):
+        RegimeClassifier(calibration="platt").fit(X, y)
+    with pytest.raises(ValueError, match="cv must be an integer >= 2, was 1"):
+        RegimeClassifier(cv=1).fit(X, y)
+
+
+# --------------------------------------------------------------------------- small set
+@pytest.fixture(scope="module")
+def small_sets():
+    with threadpool_limits(1):
+        train = generate(40, seed=5, min_per_label=3, rounds=1)
+        test = generate(25, seed=6, min_per_label=0, rounds=0)
+    return train, test
+
+
+def test_draws_are_seeded_and_in_range():
+    a, b, c = draw_cases(50, 1), draw_cases(50, 1), draw_cases(50, 2)
+    assert a == b and a != c
+    for case in a:
+        for k in ("b", "amplitude", "frequency", "mass_ratio", "r_right", "r_left"):
+            lo, hi = PARAM_RANGES[k]
+            assert lo <= getattr(case, k) <= hi
+
+
+@pytest.fixture(scope="module")
+def small_model(small_sets):
+    with threadpool_limits(1):
+        return fit_model(small_sets[0], max_iter=40, metadata={"seed": 5})
+
+
+def test_small_set_trains_and_scores(small_sets, small_model):
+    train, test = small_sets
+    assert set(train["label"]) <= set(LABELS) and len(set(train["label"])) >= 3
+    assert train["param:origin"].str.startswith("target:").any()     # rare-label draws
+    proba = small_model.predict_proba(test)
+    assert list(proba.columns) == list(LABELS)
+    np.testing.assert_allclose(proba.sum(axis=1), 1.0, atol=1e-9)
+    again = fit_model(train, max_iter=40)
+    np.testing.assert_array_equal(small_model.predict_proba(test), again.predict_proba(test))
+    rep = evaluate(small_model, test)
+    assert {"balanced_accuracy", "recall", "confusion", "baseline"} <= set(rep)
+    assert np.asarray(rep["confusion"]["matrix"]).sum() == len(test)
+    # even this tiny model (40 random rigs) is far better than chance (1 / number of
+    # labels present) on rigs drawn with other seeds
+    assert rep["balanced_accuracy"] > max(0.4, 2.0 / len(rep["labels_present"]))
+
+
+def test_model_file_round_trip(small_sets, small_model, tmp_path):
+    _, test = small_sets
+    path = save_model(small_model, tmp_path / "m.skops")
+    back = load_model(path)
+    np.testing.assert_array_equal(back.predict_proba(test), small_model.predict_proba(test))
+    assert back.feature_names == small_model.feature_names
+    assert back.metadata == {"seed": 5} and back.rule_inputs == small_model.rule_inputs
+    import skops.io as sio
+    assert set(sio.get_untrusted_types(file=path)) <= set(TRUSTED_TYPES)
+
+
+def test_untrusted_or_foreign_files_are_refused(tmp_path):
+    import os
+
+    import skops.io as sio
+    from sklearn.linear_model import LogisticRegression
+
+    bad = tmp_path / "bad.skops"
+    sio.dump({"classifier": LogisticRegression(), "hook": os.system}, bad)
+    with pytest.raises(InputError, match="refusing to load untrusted types .*system"):
+        load_model(bad)
+    other = tmp_path / "other.skops"
+    sio.dump({"classifier": LogisticRegression()}, other)     # trusted types, wrong model
+    with pytest.raises(InputError, match="not a vidiscover regime model"):
+        load_model(other)
+    junk = tmp_path / "junk.skops"
+    junk.write_text("not a model")
+    with pytest.raises(InputError, match="not a skops model file"):
+        load_model(junk)
+    with pytest.raises(InputError, match="no such model file"):
+        load_model(tmp_path / "missing.skops")
+
+
+def test_rule_baseline_applies_the_design_rules():
+    base = dict(impacts_per_cycle=2.0, impacting_cycle_share=1.0, envelope_modulation=0.01,
+                strobe_period_error=0.001, one_per_cycle_share=0.0, two_per_cycle_share=1.0,
+                alternation=1.0, asymmetry=0.3)
+    rows = [base, {**base, "asymmetry": 0.02}, {**base, "impacts_per_cycle": 0.0},
+            {**base, "impacting_cycle_share": 0.5, "envelope_modulation": 0.3},
+            {**base, "impacting_cycle_share": 0.5}, {**base, "strobe_period_error": 0.2},
+            {**base, "two_per_cycle_share": 0.2}, {**base, "one_per_cycle_share": 0.95,
+                                                   "two_per_cycle_share": 0.0}]
+    assert list(RuleBaseline().predict(pd.DataFrame(rows))) == [
+        "2ipc_asym", "2ipc_sym", "no_impact", "smr", "chaotic", "chaotic", "multi_ipc",
+        "1ipc"]
+
+
+# --------------------------------------------------------------------------- shipped model
+@pytest.fixture(scope="module")
+def default_model():
+    return load_default_model()
+
+
+def test_default_model_on_fresh_held_out_set(default_model):
+    """60 random rigs never seen in training (seed 424242). With a few cases per label
+    the balanced accuracy is noisy, so this fast test asks >= 0.85 (and accuracy >= 0.9);
+    the issue's figures (>= 0.95, recall >= 0.9) are checked on 600 cases in the slow
+    test below and printed by benchmarks/bench_regimes.py."""
+    with threadpool_limits(1):
+        test = generate(60, seed=424242, rounds=0)
+    rep = evaluate(default_model, test)
+    acc = np.trace(np.asarray(rep["confusion"]["matrix"])) / rep["n"]
+    assert acc >= 0.9, rep
+    assert rep["balanced_accuracy"] >= 0.85, rep
+
+
+@pytest.mark.slow
+def test_default_model_meets_the_issue_targets(default_model):
+    test = generate(600, seed=31337, rounds=0, n_jobs=None)
+    rep = evaluate(default_model, test)
+    assert rep["balanced_accuracy"] >= 0.95, rep
+    counts = test["label"].value_counts()
+    for lab, rec in rep["recall"].items():
+        if counts[lab] >= 10:
+            assert rec >= 0.9, (lab, rep)
+
+
+@pytest.mark.parametrize("b_mm", [6.0, 7.5, 9.0, 15.0, 17.5])
+def test_paper_presets_get_their_simulated_regime(default_model, b_mm):
+    """The classifier, from sensor data only, names the regime our model simulates."""
+    rec, truth, _ = simulate_to_memory(preset("paper", b=b_mm * 1e-3),
+                                       Effects.parse(["asymmetric_restitution=0.8782,0.2018"]),
+                                       seed=1, settle=20.0)
+    out = default_model.classify(rec)
+    assert out.label == truth["regime"]["label"]
+    assert sum(out.proba.values()) == pytest.approx(1.0)
+    assert out.proba[out.label] > 0.5
+    assert not out.warnings
+
+
+def test_outside_the_training_domain_warns(default_model):
+    rec, _, _ = simulate_to_memory(preset("paper", b=0.06, amplitude=3e-3, frequency=15.0),
+                                   seed=1, settle=5.0, duration=2.0)
+    out = default_model.classify(rec)
+    text = " ".join(out.warnings)
+    assert "b = 0.06 outside the training range" in text
+    assert "frequency = 15 outside" in text and "record length 2 s" in text

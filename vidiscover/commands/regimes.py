@@ -1,0 +1,236 @@
+"""Regime commands: ``classify`` and ``train`` (regime classifier) and ``sweep``."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from ..cli import emit, handle_errors
+from ..errors import InputError
+from ..params import PRESETS
+
+
+# ---- classify / train (owned by the regime classifier) ----
+def _check_model_out(out: Path) -> Path:
+    if out.suffix != ".skops":
+        raise InputError(f"--out {out}: a model file must end in .skops, e.g. --out "
+                         "regime_model.skops")
+    if not out.parent.is_dir():
+        raise InputError(f"--out {out}: directory {out.parent} does not exist; create it "
+                         "first")
+    return out
+
+
+def _proba_text(proba: dict) -> str:
+    top = sorted(proba.items(), key=lambda kv: -kv[1])[:3]
+    return ", ".join(f"{k} {v:.2f}" for k, v in top if v > 0)
+
+
+@click.command()
+@click.argument("recordings", nargs=-1, required=True,
+                type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--meta", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Metadata JSON for every recording (default: each recording's sidecar).")
+@click.option("--model", "model_path", type=click.Path(dir_okay=False, path_type=Path),
+              default=None, help="Regime model (.skops from `vidiscover train`; default: "
+                                 "the model shipped with vidiscover).")
+@click.option("--json", "as_json", is_flag=True,
+              help="Print a JSON list of {file, label, proba, warnings}.")
+@handle_errors
+def classify(recordings, meta, model_path, as_json):
+    """Label recordings by regime, with class probabilities.
+
+    Every recording is analysed from its sensor data alone (impacts, return map,
+    LO response) and labelled by the regime classifier; a warning is printed when
+    a recording lies outside the classifier's training domain.
+    """
+    from ..io import read_recording
+    from ..regimes.classifier import load_default_model, load_model
+
+    recs = [read_recording(p, meta=meta) for p in recordings]
+    model = load_model(model_path) if model_path is not None else load_default_model()
+    results = [model.classify(rec, file=str(p)).to_dict() for p, rec in zip(recordings, recs)]
+    for r in results:
+        for w in r["warnings"]:
+            click.echo(f"vidiscover: warning: {r['file']}: outside the training domain "
+                       f"({w}); the label may be unreliable", err=True)
+    human = "\n".join(f"{r['file']}: {r['label']} ({_proba_text(r['proba'])})"
+                      for r in results)
+    emit(as_json, results, human)
+
+
+@click.command()
+@click.option("--out", type=click.Path(dir_okay=False, path_type=Path), required=True,
+              help="Model file to write (.skops); its training report goes beside it "
+                   "(MODEL.json).")
+@click.option("--seed", type=int, default=0, show_default=True,
+              help="Seed of the training sweep (the test sweep uses seed + 100003).")
+@click.option("--n", "n", type=int, default=2500, show_default=True,
+              help="Random training cases (rare labels get targeted cases on top).")
+@click.option("--n-test", type=int, default=800, show_default=True,
+              help="Random held-out test cases (0: no evaluation).")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Simulate on a Dask distributed cluster, e.g. tcp://host:8786 "
+                   "(default: joblib processes on this machine).")
+@click.option("--n-jobs", type=int, default=None,
+              help="Worker processes without --scheduler (default: all cores; 1: serial).")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON document.")
+@handle_errors
+def train(out, seed, n, n_test, scheduler, n_jobs, as_json):
+    """Simulate a sweep, train and evaluate the regime classifier.
+
+    Random rigs (clearance, base amplitude and frequency, mass ratio, restitution
+    per wall, friction, inclination, sensor noise and resonance) are simulated,
+    recorded and analysed; the classifier learns their true regime from the
+    features of the recordings and is scored on a held-out sweep simulated with
+    other seeds (balanced accuracy, recall per label, confusion table), beside the
+    rule-based baseline.
+    """
+    import time
+
+    from .._atomic import write_json
+    from ..regimes.classifier import save_model
+    from ..regimes.classifier import train as run_train
+
+    out = _check_model_out(out)
+    if n < 1 or n_test < 0:
+        raise InputError(f"--n must be >= 1 and --n-test >= 0, were {n} and {n_test}")
+    t0 = time.perf_counter()
+    model, report = run_train(n, seed, n_test=n_test, n_jobs=n_jobs, scheduler=scheduler,
+                              progress=not as_json)
+    report["seconds"] = round(time.perf_counter() - t0, 1)
+    report["command"] = (f"vidiscover train --seed {seed} --n {n} --n-test {n_test} "
+                         f"--out {out}")
+    model.metadata["command"] = report["command"]
+    meta_path = out.with_suffix(".json")
+    save_model(model, out)
+    write_json(meta_path, {**dict(model.metadata), "report": report})
+    report["outputs"] = [str(out), str(meta_path)]
+    lines = [f"trained on {report['n_train']} simulated recordings in "
+             f"{report['seconds']:.0f} s; wrote {out} and {meta_path}"]
+    if "balanced_accuracy" in report:
+        lines.append(_report_text(report))
+    emit(as_json, report, "\n".join(lines))
+
+
+def _report_text(report: dict) -> str:
+    """Scores and confusion tables of the classifier and the rule baseline."""
+    from ..regimes.classifier import format_report
+
+    return format_report(report)
+
+
+# ---- sweep (owned by sweep module) ----
+
+
+def _base_params(preset_name: str, changes: tuple[str, ...]):
+    from ..params import preset
+
+    fixed: dict[str, float] = {}
+    for item in changes:
+        name, eq, value = item.partition("=")
+        if not eq:
+            raise InputError(f"--set {item!r}: expected NAME=VALUE, e.g. --set m2=0.05")
+        try:
+            fixed[name.strip()] = float(value)
+        except ValueError:
+            raise InputError(f"--set {item!r}: VALUE must be a number") from None
+    return preset(preset_name, **fixed)
+
+
+def _sweep_values(start: float, stop: float, n: int, log: bool):
+    import numpy as np
+
+    if n < 1:
+        raise InputError(f"--n must be >= 1 (number of sweep points), was {n}")
+    if log:
+        if not (start > 0 and stop > 0):
+            raise InputError(f"--log needs --from and --to > 0, were {start:g} and {stop:g}")
+        return np.geomspace(start, stop, n)
+    return np.linspace(start, stop, n)
+
+
+@click.command()
+@click.option("--param", required=True, metavar="NAME",
+              help="Parameter to sweep: b, amplitude, frequency, r, m1, m2, c1, k1, noise, "
+                   "or an effect parameter such as mu (coulomb_friction.mu), theta, r_left.")
+@click.option("--from", "start", type=float, required=True,
+              help="First value (SI units, e.g. 0.003 for b = 3 mm; theta in deg).")
+@click.option("--to", "stop", type=float, required=True, help="Last value.")
+@click.option("--n", "n", type=int, required=True, help="Number of points.")
+@click.option("--log", is_flag=True, help="Space the values geometrically.")
+@click.option("--preset", "preset_name", type=click.Choice(sorted(PRESETS)), default="paper",
+              show_default=True, help="Parameter set the sweep starts from.")
+@click.option("--set", "fixed", multiple=True, metavar="NAME=VALUE",
+              help="Change a fixed parameter of every point, e.g. --set b=0.015.")
+@click.option("--effect", multiple=True, metavar="NAME[=VALUE,...]",
+              help="Switch on an effect at every point (repeatable), e.g. inclination=2.")
+@click.option("--seed", type=int, default=0, show_default=True,
+              help="Master seed (each point's seed is derived from it and its index).")
+@click.option("--settle", type=float, default=10.0, show_default=True,
+              help="Simulated time before each record (s).")
+@click.option("--duration", type=float, default=5.12, show_default=True,
+              help="Record length per point (s).")
+@click.option("--noise", type=float, default=1.0, show_default=True,
+              help="Scale factor of the sensor noise levels.")
+@click.option("--scheduler", default=None, metavar="ADDRESS",
+              help="Run on a Dask distributed cluster, e.g. tcp://host:8786 "
+                   "(default: joblib processes on this machine).")
+@click.option("--n-jobs", type=int, default=None,
+              help="Worker processes without --scheduler (default: all cores; 1: serial).")
+@click.option("--classify", "use_model", is_flag=True,
+              help="Also predict each point's label from the sensor data with the "
+                   "shipped regime classifier (column label_pred).")
+@click.option("--model", type=click.Path(dir_okay=False, path_type=Path), default=None,
+              help="Regime classifier to predict labels with (implies --classify).")
+@click.option("--out", type=click.Path(file_okay=False, path_type=Path),
+              default=Path("sweep-output"), show_default=True,
+              help="Output directory: sweep.parquet, bifurcation.parquet, sweep.json, "
+                   "bifurcation.png.")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON document.")
+@handle_errors
+def sweep(param, start, stop, n, log, preset_name, fixed, effect, seed, settle, duration,
+          noise, scheduler, n_jobs, use_model, model, out, as_json):
+    """Sweep a parameter: table of regimes and a bifurcation diagram.
+
+    Every point is simulated, recorded through the sensor model, analysed from the
+    sensor data and labelled with its true regime; the bifurcation diagram plots the
+    impact time differences (over the forcing period) against the parameter.
+    """
+    import time
+
+    from ..sweep import sweep as run_sweep
+    from ..sweep import write_sweep
+
+    base = _base_params(preset_name, fixed)
+    values = _sweep_values(start, stop, n, log)
+    classify = None
+    if model is not None:
+        from ..regimes.classifier import load_model
+
+        classify = load_model(model)
+    elif use_model:
+        from ..regimes.classifier import load_default_model
+
+        classify = load_default_model()
+    t0 = time.perf_counter()
+    df = run_sweep(param, values, base=base, effects=list(effect), seed=seed, settle=settle,
+                   duration=duration, noise=noise, scheduler=scheduler, n_jobs=n_jobs,
+                   classify=classify, progress=not as_json)
+    elapsed = time.perf_counter() - t0
+    files = write_sweep(df, out)
+    points = df.drop(columns=["dt_T"])
+    rows = points.astype(object).where(points.notna(), None).to_dict(orient="records")
+    labels = {k: int(v) for k, v in df["label"].value_counts().items()}
+    payload = {"param": param, "n": len(df), "seconds": round(elapsed, 3),
+               "labels": labels, "rows": rows, "outputs": [str(f) for f in files]}
+    counts = ", ".join(f"{k} {v}" for k, v in labels.items())
+    human = (f"swept {param} over {len(df)} values from {values[0]:g} to {values[-1]:g} "
+             f"in {elapsed:.1f} s\nregimes: {counts}\n")
+    if classify is not None:
+        agree = float((df["label_pred"] == df["label"]).mean())
+        payload["label_agreement"] = agree
+        human += f"predicted label = true label at {100 * agree:.0f} % of the points\n"
+    human += "\n".join(f"  {f}" for f in files)
+    emit(as_json, payload, human)

@@ -1,0 +1,272 @@
+"""More regime features, added to the registry of :mod:`vidiscover.analysis.returnmap`.
+
+Importing this module registers the features below with
+:func:`~vidiscover.analysis.returnmap.register_feature`, so
+:func:`~vidiscover.analysis.analyze` computes them and the registry-wide tests cover
+them. Like the stage-4 features they see only the recording (detected impacts, the
+LO displacement and the fitted forcing), never the simulated truth; each returns a
+float, NaN when undefined for the record.
+
+* cycle counts: ``one_per_cycle_share``, ``multi_per_cycle_share``, ``count_std``,
+  ``modal_count_share``, ``quiet_run`` (longest run of impact-free cycles);
+* impact timing: ``phase_coherence`` (impacts locked to the forcing phase),
+  ``dt_max`` / ``dt_min`` (longest / shortest gap, in periods), ``side_run`` (longest
+  run of impacts on one wall);
+* return map: ``returnmap_top_share`` (points in the four largest clusters),
+  ``returnmap_cluster_density`` (clusters per point);
+* LO response: ``waveform_period_error`` (the displacement over a cycle repeats
+  after p <= 4 cycles), ``waveform_period`` (that p, 0 if none), ``strobe_dispersion``
+  (spread of the stroboscopic section), ``envelope_cv``;
+* strengths: ``dv_side_ratio`` (|log| of the mean pulse ratio right/left).
+
+Examples
+--------
+>>> import vidiscover.regimes.features as rf
+>>> from vidiscover.analysis import FEATURES
+>>> set(rf.REGIME_FEATURES) <= set(FEATURES)
+True
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..analysis.returnmap import FEATURES, FeatureContext, register_feature
+
+__all__ = ["REGIME_FEATURES", "cycle_waveforms"]
+
+_NAN = float("nan")
+#: Samples per cycle of the resampled LO waveform.
+_WAVE_POINTS = 64
+#: ``waveform_period_error`` below this (relative to max |x|) counts as periodic.
+PERIODIC_TOL = 0.02
+
+
+def _register(name: str):
+    """Register once (re-importing the module, e.g. by doctest, keeps the first)."""
+    def deco(func):
+        if name not in FEATURES:
+            register_feature(name)(func)
+        return func
+    return deco
+
+
+def _counts(ctx: FeatureContext) -> np.ndarray:
+    return ctx.counts()
+
+
+@_register("one_per_cycle_share")
+def _share1(ctx: FeatureContext) -> float:
+    """Share of complete cycles with exactly one impact."""
+    c = _counts(ctx)
+    return float((c == 1).mean()) if c.size else _NAN
+
+
+@_register("multi_per_cycle_share")
+def _share3(ctx: FeatureContext) -> float:
+    """Share of complete cycles with three or more impacts."""
+    c = _counts(ctx)
+    return float((c >= 3).mean()) if c.size else _NAN
+
+
+@_register("count_std")
+def _count_std(ctx: FeatureContext) -> float:
+    """Standard deviation of the impacts per cycle."""
+    c = _counts(ctx)
+    return float(c.std()) if c.size else _NAN
+
+
+@_register("modal_count_share")
+def _modal(ctx: FeatureContext) -> float:
+    """Share of cycles with the most common number of impacts."""
+    c = _counts(ctx)
+    return float(np.bincount(c).max() / c.size) if c.size else _NAN
+
+
+@_register("quiet_run")
+def _quiet_run(ctx: FeatureContext) -> float:
+    """Longest run of consecutive impact-free cycles, as a share of the cycles."""
+    c = _counts(ctx)
+    if c.size == 0:
+        return _NAN
+    best = run = 0
+    for quiet in c == 0:
+        run = run + 1 if quiet else 0
+        best = max(best, run)
+    return float(best / c.size)
+
+
+@_register("phase_coherence")
+def _phase(ctx: FeatureContext) -> float:
+    """Locking of the impacts to the forcing phase.
+
+    Mean resultant length of the impact phases on each wall, weighted by count: 1
+    when every impact on a wall comes at the same forcing phase.
+    """
+    if ctx.t.size == 0:
+        return _NAN
+    ph = 2 * math.pi * ctx.t / ctx.period + ctx.forcing.phase
+    total = 0.0
+    for s in ("right", "left"):
+        m = ctx.side == s
+        if m.any():
+            total += abs(np.exp(1j * ph[m]).sum())
+    return float(total / ctx.t.size)
+
+
+@_register("dt_max")
+def _dt_max(ctx: FeatureContext) -> float:
+    """Longest time between consecutive impacts, in forcing periods."""
+    dt = ctx.returnmap.dt
+    return float(dt.max() / ctx.period) if dt.size else _NAN
+
+
+@_register("dt_min")
+def _dt_min(ctx: FeatureContext) -> float:
+    """Shortest time between consecutive impacts, in forcing periods."""
+    dt = ctx.returnmap.dt
+    return float(dt.min() / ctx.period) if dt.size else _NAN
+
+
+@_register("side_run")
+def _side_run(ctx: FeatureContext) -> float:
+    """Longest run of consecutive impacts on the same wall."""
+    if ctx.t.size == 0:
+        return _NAN
+    same = np.r_[False, ctx.side[1:] == ctx.side[:-1]]
+    best = run = 1
+    for s in same[1:]:
+        run = run + 1 if s else 1
+        best = max(best, run)
+    return float(best)
+
+
+@_register("returnmap_top_share")
+def _top_share(ctx: FeatureContext) -> float:
+    """Share of the return-map points in its four largest clusters."""
+    rm = ctx.returnmap
+    if rm.n_points == 0:
+        return _NAN
+    counts = np.sort(np.bincount(rm.cluster))[::-1]
+    return float(counts[:4].sum() / rm.n_points)
+
+
+@_register("returnmap_cluster_density")
+def _density(ctx: FeatureContext) -> float:
+    """Number of return-map clusters per point (1 for a cloud, ~0 for a few points)."""
+    rm = ctx.returnmap
+    return float(rm.n_clusters / rm.n_points) if rm.n_points else _NAN
+
+
+@_register("dv_side_ratio")
+def _dv_ratio(ctx: FeatureContext) -> float:
+    """|log(mean |dv| right / mean |dv| left)|: how differently the walls push the LO."""
+    a = np.abs(ctx.dv)
+    r, le = a[ctx.side == "right"], a[ctx.side == "left"]
+    if not (r.size and le.size) or r.mean() <= 0 or le.mean() <= 0:
+        return _NAN
+    return float(abs(math.log(r.mean() / le.mean())))
+
+
+def cycle_waveforms(ctx: FeatureContext, points: int = _WAVE_POINTS) -> np.ndarray:
+    """LO displacement over each complete cycle, resampled at ``points`` phases.
+
+    Parameters
+    ----------
+    ctx : FeatureContext
+        The record.
+    points : int
+        Samples per cycle.
+
+    Returns
+    -------
+    ndarray, shape (n_cycles, points)
+        Empty when there is no complete cycle or no finite displacement.
+    """
+    c = ctx.cycles()
+    ok = np.isfinite(ctx.x)
+    if c.size < 2 or ok.sum() < 2:
+        return np.zeros((0, points))
+    grid = c[:-1, None] + np.diff(c)[:, None] * (np.arange(points) / points)[None, :]
+    return np.interp(grid.ravel(), ctx.ts[ok], ctx.x[ok]).reshape(grid.shape)
+
+
+def _amp(ctx: FeatureContext) -> float:
+    ok = np.isfinite(ctx.x)
+    return float(np.abs(ctx.x[ok]).max()) if ok.any() else _NAN
+
+
+def _waveform_errors(ctx: FeatureContext) -> list[float]:
+    """Worst RMS change of the cycle waveform over p = 1..4 cycles.
+
+    Over the last half of the record, relative to max |x|.
+    """
+    w = cycle_waveforms(ctx)
+    amp = _amp(ctx)
+    if w.shape[0] < 6 or not amp > 0:
+        return []
+    w = w[w.shape[0] // 2:]
+    out = []
+    for p in range(1, 5):
+        if w.shape[0] <= p:
+            break
+        rms = np.sqrt(np.mean((w[p:] - w[:-p]) ** 2, axis=1))
+        out.append(float(rms.max() / amp))
+    return out
+
+
+@_register("waveform_period_error")
+def _wave_err(ctx: FeatureContext) -> float:
+    """How far the LO response is from periodic (~0 when periodic).
+
+    Min over p <= 4 of the worst RMS change of the LO waveform over p cycles (last
+    half of the record) relative to max |x|.
+    """
+    e = _waveform_errors(ctx)
+    return float(min(e)) if e else _NAN
+
+
+@_register("waveform_period")
+def _wave_period(ctx: FeatureContext) -> float:
+    """Smallest p <= 4 with ``waveform_period_error`` below 2 %, 0 if none."""
+    e = _waveform_errors(ctx)
+    if not e:
+        return _NAN
+    for p, err in enumerate(e, start=1):
+        if err < PERIODIC_TOL:
+            return float(p)
+    return 0.0
+
+
+@_register("strobe_dispersion")
+def _strobe_disp(ctx: FeatureContext) -> float:
+    """Spread of the stroboscopic section of the LO displacement.
+
+    Standard deviation of x at the cycle starts relative to max |x|: ~0 for period
+    1, larger for subharmonic, quasi-periodic or irregular motion.
+    """
+    w = cycle_waveforms(ctx)
+    amp = _amp(ctx)
+    if w.shape[0] < 2 or not amp > 0:
+        return _NAN
+    return float(w[:, 0].std() / amp)
+
+
+@_register("envelope_cv")
+def _env_cv(ctx: FeatureContext) -> float:
+    """Coefficient of variation of the per-cycle LO half peak-to-peak."""
+    w = cycle_waveforms(ctx)
+    if w.shape[0] < 2:
+        return _NAN
+    a = 0.5 * (w.max(axis=1) - w.min(axis=1))
+    return float(a.std() / a.mean()) if a.mean() > 0 else _NAN
+
+
+#: Names of the features this module adds.
+REGIME_FEATURES: tuple[str, ...] = (
+    "one_per_cycle_share", "multi_per_cycle_share", "count_std", "modal_count_share",
+    "quiet_run", "phase_coherence", "dt_max", "dt_min", "side_run", "returnmap_top_share",
+    "returnmap_cluster_density", "dv_side_ratio", "waveform_period_error",
+    "waveform_period", "strobe_dispersion", "envelope_cv")
