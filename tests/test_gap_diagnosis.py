@@ -1,0 +1,192 @@
+"""Sim-to-real gap diagnosis: statistics, fits, verdicts, the quick battery.
+
+Ground truth is the effect (and its parameters) switched on when simulating the
+"real" recording; the diagnosis is never told.
+"""
+
+from __future__ import annotations
+
+import cmath
+import json
+import math
+
+import numpy as np
+import pytest
+from gap_cases import quick_battery, recording
+
+from vidiscover.errors import InputError
+from vidiscover.gap import STATS, GapReport, diagnose, measure
+from vidiscover.gap.components import GROUPS, compare, energy_distance
+
+
+def test_energy_distance_of_point_masses_and_identical_clouds():
+    rng = np.random.default_rng(0)
+    p = rng.normal(size=(40, 2))
+    assert energy_distance(p, p) == pytest.approx(0.0, abs=1e-12)
+    a, b = np.zeros((5, 2)), np.zeros((7, 2)) + [0.3, 0.4]
+    assert energy_distance(a, b) == pytest.approx(2 * 0.5, rel=1e-12)
+    q = rng.normal(size=(30, 2)) + [1.0, 0.0]
+    assert energy_distance(p, q) == pytest.approx(energy_distance(q, p), rel=1e-12)
+    assert energy_distance(p, q) > energy_distance(p, rng.normal(size=(30, 2)))
+    assert math.isnan(energy_distance(p, np.zeros((0, 2))))
+
+
+def test_every_statistic_has_a_group_and_a_positive_floor():
+    assert {g for g, _, _ in STATS.values()} <= set(GROUPS)
+    assert all(floor > 0 for _, floor, _ in STATS.values())
+
+
+def test_measure_recovers_the_base_harmonics():
+    rec, _ = recording(0.009, ("excitation_distortion=0.06,0.5,0.02,-1.0",))
+    v = measure(rec).values
+    h2 = complex(v["excitation.h2"], v["excitation.h2s"])
+    h3 = complex(v["excitation.h3"], v["excitation.h3s"])
+    assert abs(h2 - cmath.rect(0.06, 0.5)) < 1e-3
+    assert abs(h3 - cmath.rect(0.02, -1.0)) < 1e-3
+    nominal = measure(recording(0.009)[0]).values
+    assert abs(complex(nominal["excitation.h2"], nominal["excitation.h2s"])) < 1e-3
+
+
+def test_pulse_width_grows_with_the_contact_duration():
+    widths = [measure(recording(0.009, spec)[0]).values["sensors.pulse_width"]
+              for spec in ((), ("contact_duration=0.0005",), ("contact_duration=0.0015",))]
+    assert widths[0] < widths[1] < widths[2]
+    # area / peak of a 1.5 ms half-sine is 2 tau / pi = 6.1 samples at 6400 Hz; the
+    # detector's pulse model (fitted peak and area) reads wide pulses narrower
+    assert math.exp(widths[2]) > 3 * math.exp(widths[0])
+    assert 3.0 < math.exp(widths[2]) < 6.5
+
+
+def test_wall_restitution_statistics_match_the_truth():
+    rec, _ = recording(0.009, ("asymmetric_restitution=0.85,0.3",))
+    v = measure(rec).values
+    assert v["right.r_level"] == pytest.approx(0.85, abs=0.01)
+    assert v["left.r_level"] == pytest.approx(0.3, abs=0.02)
+
+
+def test_a_signature_has_no_gap_with_itself():
+    sig = measure(recording(0.009)[0])
+    gap = compare(sig, sig, {})
+    assert gap.total == 0.0
+    assert set(gap.by_group()) == set(GROUPS)
+
+
+def test_unknown_candidate_is_rejected():
+    with pytest.raises(InputError, match="unknown gap candidate"):
+        diagnose(recording(0.009)[0], candidates=["gravity_waves"])
+
+
+@pytest.fixture(scope="module")
+def small_report():
+    rec, _ = recording(0.009, ("excitation_distortion=0.06,0.5",))
+    return diagnose(rec, n_jobs=1, candidates=["excitation_distortion", "inclination"])
+
+
+def test_report_has_the_design_keys_and_is_json_ready(small_report):
+    d = small_report.to_dict()
+    for key in ("gap_before", "effects", "attributed", "unexplained"):
+        assert key in d
+    for e in d["effects"]:
+        assert {"name", "params", "gap_after", "shrink"} <= set(e)
+    json.dumps(d)
+    assert isinstance(small_report, GapReport)
+    assert d["verdict"] == "excitation_distortion"
+    fitted = d["attributed"][0]["params"]
+    assert fitted["h2"] == pytest.approx(0.06, abs=2e-3)
+    assert fitted["phi2"] == pytest.approx(0.5, abs=0.05)
+    assert d["effects"][0]["shrink"] > 0.9
+
+
+def test_same_seed_same_report(small_report):
+    rec, _ = recording(0.009, ("excitation_distortion=0.06,0.5",))
+    again = diagnose(rec, n_jobs=1, candidates=["excitation_distortion", "inclination"])
+    assert json.dumps(again.to_dict()) == json.dumps(small_report.to_dict())
+
+
+def test_figures_are_written(small_report, tmp_path):
+    from vidiscover.gap.figures import write_figures
+
+    names = write_figures(small_report, tmp_path)
+    assert sorted(names) == ["restitution.png", "returnmap.png", "waterfall.png"]
+    assert all((tmp_path / n).stat().st_size > 1000 for n in names)
+
+
+# ------------------------------------------------------------------ the quick battery
+@pytest.fixture(scope="module")
+def battery():
+    return quick_battery()
+
+
+def _case(battery, effect):
+    return next(c for c in battery["cases"] if c["effect"] == effect)
+
+
+def test_quick_battery_has_the_design_keys(battery):
+    assert {"accuracy", "confusion", "cases"} <= set(battery)
+    assert len(battery["cases"]) == 4
+    json.dumps(battery)
+
+
+def test_no_effect_is_no_significant_gap(battery):
+    c = _case(battery, "none")
+    assert c["predicted"] == "none" and not c["significant"]
+
+
+def test_withheld_asymmetric_restitution_is_found_with_its_parameters(battery):
+    c = _case(battery, "asymmetric_restitution")
+    assert c["predicted"] == "asymmetric_restitution"
+    assert c["fitted"]["r_right"] == pytest.approx(0.85, abs=0.02)
+    assert c["fitted"]["r_left"] == pytest.approx(0.3, abs=0.03)
+    assert c["shrink"] >= 0.6
+    ci = c["attributed"][0]["ci"]
+    assert ci["r_right"][0] <= 0.85 <= ci["r_right"][1]
+    assert ci["r_left"][0] <= 0.3 <= ci["r_left"][1]
+
+
+def test_withheld_inclination_is_found_with_its_angle(battery):
+    c = _case(battery, "inclination")
+    assert c["predicted"] == "inclination"
+    assert c["fitted"]["theta"] == pytest.approx(5.0, abs=0.75)
+    assert c["shrink"] >= 0.6
+    lo, hi = c["attributed"][0]["ci"]["theta"]
+    assert lo < c["fitted"]["theta"] < hi
+
+
+def test_out_of_catalogue_drift_stays_unexplained(battery):
+    c = _case(battery, "restitution_drift")
+    assert c["significant"]
+    assert c["unexplained"] >= 0.5
+    assert c["predicted"] == "unexplained"
+
+
+def test_quick_battery_accuracy_and_confusion(battery):
+    assert battery["accuracy"] == 1.0
+    assert sum(sum(row.values()) for row in battery["confusion"].values()) == 4
+
+
+def test_public_names_exist_and_are_not_private():
+    import importlib
+
+    for mod in ("gap", "gap.components", "gap.fit", "gap.diagnose", "gap.battery",
+                "gap.figures", "commands.gap"):
+        m = importlib.import_module(f"vidiscover.{mod}")
+        assert all(not n.startswith("_") for n in m.__all__), mod
+        assert all(hasattr(m, n) for n in m.__all__), mod
+
+
+def test_bad_cli_input_is_one_line_and_exit_2(tmp_path):
+    from click.testing import CliRunner
+
+    from vidiscover.cli import main
+
+    rec, truth = recording(0.009)
+    from vidiscover.io import write_recording
+
+    path = tmp_path / "rec.csv"
+    write_recording(rec, path, truth=truth)
+    out = tmp_path / "out"
+    res = CliRunner().invoke(main, ["gap", str(path), "--out", str(out), "--n-jobs", "0"])
+    assert res.exit_code == 2 and "--n-jobs" in res.output
+    assert len(res.output.strip().splitlines()) == 1 and not out.exists()
+    res = CliRunner().invoke(main, ["gap-check", "--seed", "-1"])
+    assert res.exit_code == 2 and "--seed" in res.output

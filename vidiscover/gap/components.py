@@ -1,0 +1,425 @@
+"""Where the gap lies: distributional statistics of a recording and their differences.
+
+A recording (real or simulated) is reduced by :func:`measure` to a
+:class:`Signature`: a few dozen scalar statistics, each localised in one part of the
+system (a wall at the impacts, the flights, the LO response, impact timing, the
+sensors, the excitation), plus the point clouds the distributional comparisons need
+(the first return map, r per impact). Both sides of a comparison go through the same
+sensor model and the same analysis pipeline, so systematic analysis biases cancel.
+
+:func:`compare` turns two signatures into :class:`GapComponents`: each statistic's
+difference divided by its noise scale, squared. The noise scale of a statistic
+combines its own standard error on both sides, its spread over replicates of the
+nominal simulation (other initial conditions and sensor noise; this is what makes
+chaotic and SMR regimes comparable, where trajectories cannot be compared point by
+point) and a floor (the resolution below which a difference is not meaningful). A
+component of about 1 is "at the noise level"; components add to the total gap.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = ["STATS", "Signature", "GapComponents", "measure", "compare", "noise_scales",
+           "energy_distance", "mirror", "GROUPS"]
+
+#: Statistic name -> (group, floor of its noise scale, description).
+STATS: dict[str, tuple[str, float, str]] = {}
+
+
+def _stat(name: str, group: str, floor: float, doc: str) -> None:
+    STATS[name] = (group, floor, doc)
+
+
+for _side in ("right", "left"):
+    _stat(f"{_side}.r_level", f"impacts.{_side}", 0.01, "RMS of r on this wall")
+    _stat(f"{_side}.r_speed", f"impacts.{_side}", 0.05,
+          "slope of r against impact speed (s/m)")
+    _stat(f"{_side}.r_trend", f"impacts.{_side}", 0.005,
+          "drift of r: regression slope on time x half the record length")
+    _stat(f"{_side}.dv", f"impacts.{_side}", 0.02, "log of the median LO velocity jump")
+    _stat(f"{_side}.rate", f"impacts.{_side}", 0.03, "impacts on this wall per cycle")
+    _stat(f"{_side}.momentum", f"impacts.{_side}", 0.01,
+          "mean momentum residual at this wall (m/s): ball acceleration in the flights")
+_stat("flights.direction", "flights", 0.01,
+      "mean flight time towards the right minus towards the left (periods)")
+_stat("flights.speed_ratio", "flights", 0.01,
+      "log ratio of mean flight speeds towards the right and towards the left")
+_stat("lo.amplitude", "lo", 0.01, "log LO amplitude at f relative to the base amplitude")
+_stat("lo.phase", "lo", 0.01, "LO phase at f relative to the base (rad)")
+_stat("lo.envelope", "lo", 0.02, "envelope modulation of the LO (DESIGN M)")
+_stat("excitation.h2", "excitation", 0.002, "base 2nd harmonic (relative, cos part)")
+_stat("excitation.h2s", "excitation", 0.002, "base 2nd harmonic (relative, sin part)")
+_stat("excitation.h3", "excitation", 0.002, "base 3rd harmonic (relative, cos part)")
+_stat("excitation.h3s", "excitation", 0.002, "base 3rd harmonic (relative, sin part)")
+_stat("sensors.pulse_width", "sensors", 0.03,
+      "log median pulse width (area/peak of the acceleration pulses, samples)")
+#: Bands (Hz) of the displacement vs integrated acceleration residual spectrum.
+BANDS = (20.0, 40.0, 80.0, 160.0, 320.0, 640.0, 1280.0, 2560.0)
+for _k in range(len(BANDS) - 1):
+    _stat(f"sensors.residual_{int(BANDS[_k])}", "sensors", 0.1,
+          f"log10 power of laser minus integrated acceleration, {BANDS[_k]:g}-"
+          f"{BANDS[_k + 1]:g} Hz")
+_stat("timing.returnmap", "timing", 0.01,
+      "energy distance between return maps (dt_i, dt_i+1)/T (special: pairwise)")
+
+#: Component groups in report order.
+GROUPS = ("impacts.right", "impacts.left", "flights", "lo", "timing", "sensors",
+          "excitation")
+
+
+@dataclass(frozen=True, eq=False)
+class Signature:
+    """Statistics of one recording, as the gap diagnosis sees it.
+
+    Attributes
+    ----------
+    values : dict
+        Statistic name -> value (NaN when undefined, e.g. no impact on a wall).
+    errors : dict
+        Statistic name -> standard error from the record itself (0 if unknown).
+    returnmap : ndarray
+        Points (dt_i, dt_i+1) / T, shape (n, 2).
+    impacts : dict
+        Per impact arrays ``t``, ``side`` (+1/-1), ``r``, ``speed`` (used r only).
+    r_pooled : float
+        RMS of r over both walls (the nominal model's one constant r).
+    forcing : tuple
+        (frequency Hz, amplitude m, phase rad) of the fitted base sine.
+    residual_psd : tuple
+        (frequencies Hz, PSD) of laser minus integrated acceleration.
+    flight_time : float
+        Mean duration of the free flights between opposite walls (s).
+    """
+
+    values: dict
+    errors: dict
+    returnmap: np.ndarray = field(repr=False)
+    impacts: dict = field(repr=False)
+    r_pooled: float = math.nan
+    forcing: tuple = (math.nan, math.nan, math.nan)
+    residual_psd: tuple = field(default=(), repr=False)
+    flight_time: float = math.nan
+
+
+def _harmonic(t: np.ndarray, y: np.ndarray, w: float) -> complex:
+    """Complex amplitude c with y ~ Im(c exp(i w t)) + const (t spans whole cycles)."""
+    y = y - y.mean()
+    ph = w * t
+    return complex(2.0 * float(y @ np.sin(ph)) / y.size, 2.0 * float(y @ np.cos(ph)) / y.size)
+
+
+def _wrap(phi: float) -> float:
+    return float((phi + math.pi) % (2 * math.pi) - math.pi)
+
+
+def _slope(x: np.ndarray, y: np.ndarray) -> tuple[float, float]:
+    """OLS slope and its standard error (NaN/inf when not identifiable)."""
+    if x.size < 8 or np.std(x) < 0.05 * max(np.mean(np.abs(x)), 1e-9):
+        return math.nan, math.inf
+    A = np.column_stack([x - x.mean(), np.ones_like(x)])
+    coef, *_ = np.linalg.lstsq(A, y, rcond=None)
+    res = y - A @ coef
+    s2 = float(res @ res) / max(x.size - 2, 1)
+    se = math.sqrt(s2 / float(((x - x.mean()) ** 2).sum()))
+    return float(coef[0]), se
+
+
+def _wall_stats(side_name: str, sgn: int, table, det_cols, vals: dict, errs: dict,
+                n_cycles: float, momentum: np.ndarray, half: float) -> None:
+    side = np.asarray(table["side"]) == side_name
+    used = side & np.asarray(table["r_used"], dtype=bool) & np.isfinite(table["r"])
+    r = np.asarray(table["r"], dtype=float)[used]
+    speed = np.abs(np.asarray(table["u_minus"], dtype=float))[used]
+    t = np.asarray(table["t"], dtype=float)[used]
+    p = f"{side_name}."
+    vals[p + "rate"] = float(side.sum()) / n_cycles
+    errs[p + "rate"] = 0.0
+    dv = np.abs(np.asarray(table["dv"], dtype=float)[side])
+    if dv.size:
+        vals[p + "dv"] = float(np.log(np.median(dv) + 1e-12))
+        errs[p + "dv"] = float(1.25 * np.std(np.log(dv + 1e-12)) / math.sqrt(dv.size))
+    else:
+        vals[p + "dv"], errs[p + "dv"] = math.nan, 0.0
+    if r.size >= 2:
+        vals[p + "r_level"] = float(np.sqrt(np.mean(r ** 2)))
+        errs[p + "r_level"] = float(np.std(r, ddof=1) / math.sqrt(r.size))
+    else:
+        vals[p + "r_level"], errs[p + "r_level"] = math.nan, 0.0
+    vals[p + "r_speed"], errs[p + "r_speed"] = _slope(speed, r)
+    if r.size >= 8 and np.ptp(t) > 0:
+        # drift of r over the record: regression slope x half the duration, i.e. the
+        # expected change of the mean r from the first to the second half
+        A = np.column_stack([t - t.mean(), np.ones_like(t)])
+        coef, *_ = np.linalg.lstsq(A, r, rcond=None)
+        res = r - A @ coef
+        se = math.sqrt(float(res @ res) / (r.size - 2) / float(((t - t.mean()) ** 2).sum()))
+        vals[p + "r_trend"] = float(coef[0] * half)
+        errs[p + "r_trend"] = float(se * half)
+    else:
+        vals[p + "r_trend"], errs[p + "r_trend"] = math.nan, 0.0
+    m = momentum[np.asarray(det_cols["side"]) == side_name]
+    m = m[np.isfinite(m)]
+    if m.size >= 2:
+        vals[p + "momentum"] = float(np.median(m))
+        errs[p + "momentum"] = float(1.25 * np.std(m, ddof=1) / math.sqrt(m.size))
+    else:
+        vals[p + "momentum"], errs[p + "momentum"] = math.nan, 0.0
+
+
+def measure(rec, an=None, *, mass_ratio: float | None = None) -> Signature:
+    """Reduce a recording and its analysis to the gap statistics.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording.
+    an : AnalysisResult, optional
+        Its analysis (``vidiscover.analysis.analyze(rec, n_boot=0)`` when omitted).
+    mass_ratio : float, optional
+        m1 / m2 for the momentum residual (default from the metadata).
+
+    Returns
+    -------
+    Signature
+    """
+    from ..analysis import analyze
+
+    if an is None:
+        an = analyze(rec, n_boot=0)
+    fc = an.forcing
+    T = fc.period
+    w = 2 * math.pi * fc.frequency
+    t = np.asarray(rec.t, dtype=float)
+    duration = float(t[-1] - t[0]) + rec.dt
+    n_cycles = duration / T
+    vals: dict[str, float] = {}
+    errs: dict[str, float] = {}
+    table = an.impact_table
+    det = an.detection.columns
+    mr = mass_ratio if mass_ratio is not None else rec.meta.m1 / rec.meta.m2
+
+    # --- flights and the momentum residual ---------------------------------------
+    fl = an.reconstruction.flight_columns
+    n_imp = int(np.asarray(det["t"]).size)
+    momentum = np.full(n_imp, np.nan)
+    wm = np.asarray(fl["w_mean"], dtype=float) if n_imp > 1 else np.zeros(0)
+    kind = np.asarray(fl["kind"]) if n_imp > 1 else np.zeros(0, dtype=str)
+    dv = np.asarray(det["dv"], dtype=float)
+    if n_imp > 2:
+        free = kind == "free"
+        ok = free[:-1] & free[1:]
+        i = np.arange(1, n_imp - 1)
+        momentum[i] = np.where(ok, wm[1:] - wm[:-1] + mr * dv[i], np.nan)
+    ss = np.asarray(fl["side_start"]) if n_imp > 1 else np.zeros(0, dtype=str)
+    se_ = np.asarray(fl["side_end"]) if n_imp > 1 else np.zeros(0, dtype=str)
+    dur = np.asarray(fl["duration"], dtype=float) if n_imp > 1 else np.zeros(0)
+    to_r = (ss == "left") & (se_ == "right") & (kind == "free")
+    to_l = (ss == "right") & (se_ == "left") & (kind == "free")
+    if to_r.sum() >= 2 and to_l.sum() >= 2:
+        vals["flights.direction"] = float((dur[to_r].mean() - dur[to_l].mean()) / T)
+        errs["flights.direction"] = float(math.sqrt(dur[to_r].var() / to_r.sum()
+                                                    + dur[to_l].var() / to_l.sum()) / T)
+        sr, sl = np.abs(wm[to_r]), np.abs(wm[to_l])
+        vals["flights.speed_ratio"] = float(np.log(sr.mean() / sl.mean()))
+        errs["flights.speed_ratio"] = float(math.sqrt(sr.var() / sr.size / sr.mean() ** 2
+                                                      + sl.var() / sl.size / sl.mean() ** 2))
+    else:
+        for k in ("flights.direction", "flights.speed_ratio"):
+            vals[k], errs[k] = math.nan, 0.0
+
+    for sgn, name in ((1, "right"), (-1, "left")):
+        _wall_stats(name, sgn, table, det, vals, errs, n_cycles, momentum, 0.5 * duration)
+
+    # --- LO response at f and envelope -------------------------------------------
+    k_end = int(math.floor(n_cycles)) * T
+    sel = t - t[0] < k_end
+    cx = _harmonic(t[sel], np.asarray(rec.x)[sel], w)
+    vals["lo.amplitude"] = float(np.log(abs(cx) / fc.amplitude)) if fc.amplitude > 0 \
+        else math.nan
+    vals["lo.phase"] = _wrap(math.atan2(cx.imag, cx.real) - fc.phase)
+    errs["lo.amplitude"] = errs["lo.phase"] = 0.0
+    env = an.features.get("envelope_modulation", math.nan)
+    vals["lo.envelope"], errs["lo.envelope"] = float(env), 0.0
+
+    # --- excitation harmonics (relative to the fundamental, phase-referenced) ------
+    xe = np.asarray(rec.xe)[sel]
+    c1 = _harmonic(t[sel], xe, w)
+    ph1 = math.atan2(c1.imag, c1.real)
+    for n in (2, 3):
+        cn = _harmonic(t[sel], xe, n * w)
+        rel = cn / abs(c1) * np.exp(-1j * n * ph1) if abs(c1) > 0 else 0j
+        vals[f"excitation.h{n}"], vals[f"excitation.h{n}s"] = float(rel.real), float(rel.imag)
+        errs[f"excitation.h{n}"] = errs[f"excitation.h{n}s"] = 0.0
+
+    # --- pulse width -------------------------------------------------------------
+    peak = np.abs(np.asarray(det["peak"], dtype=float))
+    area = np.abs(dv)
+    good = (peak > 0) & np.isfinite(peak) & (area > 0)
+    if good.sum() >= 3:
+        width = np.log(area[good] / peak[good] * rec.sample_rate)
+        vals["sensors.pulse_width"] = float(np.median(width))
+        errs["sensors.pulse_width"] = float(1.25 * width.std() / math.sqrt(width.size))
+    else:
+        vals["sensors.pulse_width"], errs["sensors.pulse_width"] = math.nan, 0.0
+
+    # --- laser vs integrated acceleration residual spectrum -----------------------
+    from scipy import signal
+
+    recon = an.reconstruction
+    res = np.asarray(rec.x, dtype=float) - np.interp(t, recon.t, recon.x)
+    res = np.where(np.isfinite(res), res, 0.0)
+    f, psd = signal.welch(res, fs=rec.sample_rate, nperseg=min(1024, res.size))
+    for k in range(len(BANDS) - 1):
+        band = (f >= BANDS[k]) & (f < BANDS[k + 1])
+        name = f"sensors.residual_{int(BANDS[k])}"
+        vals[name] = float(np.log10(psd[band].mean() + 1e-30)) if band.any() else math.nan
+        errs[name] = 0.0
+
+    # --- return map and r per impact -----------------------------------------------
+    rm = an.returnmap
+    pts = np.column_stack([rm.x, rm.y]) / T if rm.x.size else np.zeros((0, 2))
+    used = np.asarray(table["r_used"], dtype=bool) & np.isfinite(table["r"])
+    r_all = np.asarray(table["r"], dtype=float)[used]
+    impacts = {"t": np.asarray(table["t"], dtype=float)[used],
+               "side": np.where(np.asarray(table["side"])[used] == "right", 1, -1),
+               "r": r_all,
+               "speed": np.abs(np.asarray(table["u_minus"], dtype=float))[used]}
+    r_pooled = float(np.sqrt(np.mean(r_all ** 2))) if r_all.size else math.nan
+    vals["timing.returnmap"], errs["timing.returnmap"] = 0.0, 0.0
+    return Signature(values=vals, errors=errs, returnmap=pts, impacts=impacts,
+                     r_pooled=r_pooled, forcing=(fc.frequency, fc.amplitude, fc.phase),
+                     residual_psd=(f, psd),
+                     flight_time=float(dur[to_r | to_l].mean()) if (to_r | to_l).any()
+                     else math.nan)
+
+
+def energy_distance(p: np.ndarray, q: np.ndarray) -> float:
+    """Energy distance 2E|P-Q| - E|P-P'| - E|Q-Q'| between two point clouds (>= 0).
+
+    For two point masses at distance d it is 2 d; it is 0 for equal distributions.
+    Returns NaN if either cloud is empty.
+    """
+    p, q = np.asarray(p, float), np.asarray(q, float)
+    if p.shape[0] == 0 or q.shape[0] == 0:
+        return math.nan
+
+    def mean_dist(a, b):
+        return float(np.sqrt(((a[:, None, :] - b[None, :, :]) ** 2).sum(-1)).mean())
+
+    return max(0.0, 2 * mean_dist(p, q) - mean_dist(p, p) - mean_dist(q, q))
+
+
+def noise_scales(replicates: list[Signature]) -> dict[str, float]:
+    """Spread of every statistic over replicates of one model (variance, 0 if < 2).
+
+    ``timing.returnmap`` gets the mean squared energy distance between replicate
+    pairs instead (its "noise" is the distance between two draws of the same model).
+    """
+    out: dict[str, float] = {}
+    for name in STATS:
+        if name == "timing.returnmap":
+            d = [energy_distance(a.returnmap, b.returnmap)
+                 for i, a in enumerate(replicates) for b in replicates[i + 1:]]
+            d = [x for x in d if np.isfinite(x)]
+            out[name] = float(np.mean(np.square(d))) if d else 0.0
+            continue
+        v = np.array([s.values.get(name, math.nan) for s in replicates], dtype=float)
+        v = v[np.isfinite(v)]
+        out[name] = float(v.var(ddof=1)) if v.size >= 2 else 0.0
+    return out
+
+
+@dataclass(frozen=True)
+class GapComponents:
+    """Normalised squared differences per statistic (a gap of ~1 is noise level).
+
+    Attributes
+    ----------
+    per_stat : dict
+        Statistic -> normalised squared difference.
+    diff : dict
+        Statistic -> raw difference (real minus sim).
+    """
+
+    per_stat: dict
+    diff: dict
+
+    @property
+    def total(self) -> float:
+        """Total gap score (sum over statistics)."""
+        return float(sum(self.per_stat.values()))
+
+    def by_group(self) -> dict[str, float]:
+        """Sum per component group (:data:`GROUPS` order)."""
+        out = {g: 0.0 for g in GROUPS}
+        for k, v in self.per_stat.items():
+            out[STATS[k][0]] += v
+        return out
+
+    def restricted(self, names) -> float:
+        """Sum over the given statistics only."""
+        return float(sum(self.per_stat[k] for k in names if k in self.per_stat))
+
+
+_SIDED = ("r_level", "r_speed", "r_trend", "dv", "rate")
+
+
+def mirror(sig: Signature) -> Signature:
+    """The statistics of the mirror-image motion (z -> -z, x -> -x, half a period later).
+
+    A model without inclination, with the same law on both walls and a base motion
+    of odd harmonics only is symmetric under this map, so its attractors come in
+    mirror pairs; which one a rig sits on is history, not physics.
+    """
+    import dataclasses
+
+    vals, errs = dict(sig.values), dict(sig.errors)
+    for src in (sig.values, sig.errors):
+        dst = vals if src is sig.values else errs
+        for k in _SIDED:
+            dst[f"right.{k}"], dst[f"left.{k}"] = src[f"left.{k}"], src[f"right.{k}"]
+        sgn = -1.0 if src is sig.values else 1.0
+        dst["right.momentum"] = sgn * src["left.momentum"]
+        dst["left.momentum"] = sgn * src["right.momentum"]
+        for k in ("flights.direction", "flights.speed_ratio"):
+            dst[k] = sgn * src[k]
+    imp = dict(sig.impacts)
+    imp["side"] = -np.asarray(imp["side"])
+    return dataclasses.replace(sig, values=vals, errors=errs, impacts=imp)
+
+
+def compare(real: Signature, sim: Signature, rep_var: dict[str, float], *,
+            allow_mirror: bool = False) -> GapComponents:
+    """Gap components of ``sim`` against ``real`` (see module docs).
+
+    The noise scale of a statistic uses the real side's own standard error, the
+    replicate variance of the nominal model and the floor -- never the simulated
+    side's own scatter, so that a candidate cannot "explain" a gap by being noisy.
+    With ``allow_mirror`` the better of ``sim`` and :func:`mirror` (``sim``) is used.
+    """
+    if allow_mirror:
+        a = compare(real, sim, rep_var)
+        b = compare(real, mirror(sim), rep_var)
+        return b if b.total < a.total else a
+    per, diff = {}, {}
+    for name, (_g, floor, _d) in STATS.items():
+        if name == "timing.returnmap":
+            d = energy_distance(real.returnmap, sim.returnmap)
+            if not np.isfinite(d):
+                per[name], diff[name] = 0.0, math.nan
+                continue
+            s2 = rep_var.get(name, 0.0) + floor ** 2
+            per[name], diff[name] = float(d ** 2 / s2), d
+            continue
+        a, b = real.values.get(name, math.nan), sim.values.get(name, math.nan)
+        if not (np.isfinite(a) and np.isfinite(b)):
+            per[name], diff[name] = 0.0, math.nan
+            continue
+        ea = real.errors.get(name, 0.0)
+        s2 = ea ** 2 + rep_var.get(name, 0.0) + floor ** 2
+        per[name], diff[name] = float((a - b) ** 2 / s2), float(a - b)
+    return GapComponents(per_stat=per, diff=diff)

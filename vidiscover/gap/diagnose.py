@@ -1,0 +1,387 @@
+"""Sim-to-real gap diagnosis of one recording (DESIGN.md section 5).
+
+:func:`diagnose` builds the nominal model of a recording (metadata parameters, the
+fitted base sine as excitation, one constant r = the analysis' pooled r, no
+friction, no inclination, ideal sensors), compares it like for like (same sensor
+model, same analysis pipeline, :mod:`.components`), fits every catalogue effect
+(:mod:`.fit`), ranks them by validated, penalised gap and, when the best leaves a
+significant gap, tries a second effect on top of it (forward selection).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..effects import Effects
+from ..errors import InputError
+from .components import GROUPS, STATS, compare, measure, mirror, noise_scales
+from .fit import (
+    BALL_SPEEDS,
+    CANDIDATES,
+    PENALTY,
+    CandidateFit,
+    Model,
+    _Objective,
+    fit_candidate,
+    profile_ci,
+    simulate_signature,
+    validation_signature,
+)
+
+__all__ = ["GapReport", "diagnose", "build_model", "nominal_model", "SIGNIFICANT_GAP",
+           "N_REPLICATES", "NULL_GAP"]
+
+#: Total gap above which the nominal model is significantly off. Nominal recordings
+#: diagnosed against their nominal model give 0.2-0.6 (``benchmarks/bench_gap.py``);
+#: a gap of ~1 per statistic is the noise level by construction.
+SIGNIFICANT_GAP = 8.0
+#: Gap of a correct model (noise level), subtracted before shares are computed.
+NULL_GAP = 1.0
+#: Nested candidates: the simpler one is preferred when its validated gap is within
+#: ``PARSIMONY`` times the richer one's (plus the penalty difference).
+NESTED = {"velocity_dependent_restitution": "asymmetric_restitution"}
+PARSIMONY = 1.25
+#: Nominal-model replicates used for the noise scales.
+N_REPLICATES = 4
+#: A second effect is kept only if it removes this share of the remaining gap.
+SECOND_EFFECT_SHARE = 0.3
+#: An attribution is confident when the unexplained share is below this.
+CONFIDENT = 0.5
+
+
+@dataclass(frozen=True, eq=False)
+class GapReport:
+    """Result of :func:`diagnose`.
+
+    Attributes
+    ----------
+    name : str
+        Recording label.
+    model : Model
+        The nominal model (parameters, excitation, noise scales).
+    nominal : CandidateFit
+        The nominal model scored like a candidate (its gap is ``gap_before``).
+    candidates : list of CandidateFit
+        Every fitted catalogue effect, best (lowest penalised score) first.
+    selected : list of CandidateFit
+        The forward-selected model(s): one effect, or two (the second on top of
+        the first); empty when the gap is not significant.
+    significant : bool
+        ``gap_before`` exceeds :data:`SIGNIFICANT_GAP`.
+    n_sims : int
+        Simulations spent.
+    cis : dict
+        Selected effect -> parameter -> approximate 95 % interval
+        (:func:`~vidiscover.gap.fit.profile_ci`).
+    """
+
+    name: str
+    model: Model = field(repr=False)
+    nominal: CandidateFit = field(repr=False)
+    candidates: list = field(repr=False)
+    selected: list = field(repr=False)
+    significant: bool
+    n_sims: int = 0
+    cis: dict = field(default_factory=dict)
+
+    @property
+    def gap_before(self) -> float:
+        """Total gap of the nominal model."""
+        return self.nominal.gap.total
+
+    @property
+    def final(self) -> CandidateFit:
+        """The selected model (the nominal one when nothing is selected)."""
+        return self.selected[-1] if self.selected else self.nominal
+
+    @property
+    def gap_after(self) -> float:
+        """Total gap of the selected model."""
+        return self.final.gap.total
+
+    @property
+    def unexplained(self) -> float:
+        """Share of the nominal gap above the noise level that the selection leaves.
+
+        0 when the gap is not significant; 1 when no candidate removes anything.
+        """
+        if not self.significant:
+            return 0.0
+        before = max(self.gap_before - NULL_GAP, 1e-9)
+        return float(min(1.0, max(0.0, (self.gap_after - NULL_GAP) / before)))
+
+    @property
+    def confident(self) -> bool:
+        """An attribution was made and it leaves less than half the gap unexplained."""
+        return bool(self.selected) and self.unexplained < CONFIDENT
+
+    @property
+    def verdict(self) -> str:
+        """Top-1 answer: an effect name, ``"none"`` or ``"unexplained"``."""
+        if not self.significant:
+            return "none"
+        if not self.confident:
+            return "unexplained"
+        return self.selected[0].name
+
+    def attributed(self) -> list[dict]:
+        """Selected effects with the share of the nominal gap each removed."""
+        out, prev = [], self.gap_before
+        for c in self.selected:
+            out.append({"name": c.name, "params": _clean(c.params),
+                        "ci": _clean(self.cis.get(c.name)),
+                        "share": _clean(max(0.0, prev - c.gap.total) / max(self.gap_before,
+                                                                           1e-12)),
+                        "confident": self.confident})
+            prev = c.gap.total
+        return out
+
+    def to_dict(self) -> dict:
+        """JSON-ready dict.
+
+        DESIGN keys ``gap_before``, ``effects``, ``attributed``, ``unexplained``,
+        plus components, per-statistic gaps, verdict and the nominal model.
+        """
+        before = self.nominal.gap
+        effects = []
+        for c in self.candidates:
+            effects.append({
+                "name": c.name, "params": _clean(c.params), "r": _clean(c.r),
+                "n_params": c.n_params, "gap_after": _clean(c.gap.total),
+                "score": _clean(c.score),
+                "shrink": _clean(_shrink(self.gap_before, c.gap.total)),
+                "ci": _clean(self.cis.get(c.name)) if c in self.selected else None,
+                "components_after": _clean(c.gap.by_group())})
+        comps = {g: {"before": before.by_group()[g], "after": self.final.gap.by_group()[g]}
+                 for g in GROUPS}
+        stats = {k: {"before": before.per_stat[k], "after": self.final.gap.per_stat[k],
+                     "group": STATS[k][0], "diff_before": before.diff[k]}
+                 for k in STATS}
+        return _clean({
+            "recording": self.name,
+            "gap_before": self.gap_before,
+            "gap_after": self.gap_after,
+            "significant": self.significant,
+            "threshold": SIGNIFICANT_GAP,
+            "effects": effects,
+            "attributed": self.attributed(),
+            "unexplained": self.unexplained,
+            "verdict": self.verdict,
+            "selected": [c.name for c in self.selected],
+            "components": comps,
+            "statistics": stats,
+            "nominal": {"params": self.model.params.to_dict(), "phase": self.model.phase,
+                        "noise": list(self.model.noise), "r": self.nominal.r},
+            "penalty_per_param": PENALTY,
+            "n_sims": self.n_sims,
+        })
+
+
+def _shrink(before: float, after: float) -> float:
+    return (before - after) / before if before > 0 else 0.0
+
+
+def _clean(v):
+    if isinstance(v, dict):
+        return {str(k): _clean(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_clean(x) for x in v]
+    if isinstance(v, (bool, np.bool_)):
+        return bool(v)
+    if isinstance(v, (int, np.integer)):
+        return int(v)
+    if isinstance(v, (float, np.floating)):
+        return float(v) if math.isfinite(v) else None
+    return v
+
+
+def _noise_levels(rec, an) -> tuple[float, float, float]:
+    """(x_noise, a_noise, xe_noise) of the recording (robust estimates)."""
+    from ..analysis.signals import robust_std
+
+    t = np.asarray(rec.t, float)
+    w = 2 * math.pi * an.forcing.frequency
+    cols = [np.ones_like(t)]
+    for n in (1, 2, 3, 4):
+        cols += [np.sin(n * w * t), np.cos(n * w * t)]
+    A = np.column_stack(cols)
+    xe = np.asarray(rec.xe, float)
+    res = xe - A @ np.linalg.lstsq(A, xe, rcond=None)[0]
+    xe_noise = float(robust_std(np.diff(res)) / math.sqrt(2))
+    a_noise = float(an.detection.noise)
+    return xe_noise, a_noise, xe_noise
+
+
+def build_model(rec, an=None, *, settle: float = 20.0) -> Model:
+    """The nominal model of ``rec`` (without replicate variances).
+
+    Parameters
+    ----------
+    rec : Recording
+    an : AnalysisResult, optional
+        Its analysis (computed when omitted).
+    settle : float
+        Settling time of every simulation (s).
+
+    Returns
+    -------
+    Model
+    """
+    from ..analysis import analyze
+
+    if an is None:
+        an = analyze(rec, n_boot=0)
+    real = measure(rec, an)
+    fc = an.forcing
+    r = real.r_pooled if np.isfinite(real.r_pooled) else 0.6
+    params = rec.meta.params(r=float(min(max(r, 0.0), 1.0))).replace(
+        amplitude=float(fc.amplitude), frequency=float(fc.frequency))
+    duration = float(rec.t[-1] - rec.t[0]) + rec.dt
+    return Model(params=params, phase=float(fc.phase), duration=duration,
+                 sample_rate=float(rec.sample_rate), noise=_noise_levels(rec, an),
+                 real=real, settle=settle)
+
+
+def nominal_model(rec, an=None, *, seed: int = 0) -> tuple[Model, CandidateFit, int]:
+    """Nominal model with its attractor, noise scales and validated gap.
+
+    The initial ball speeds of :data:`~vidiscover.gap.fit.BALL_SPEEDS` are tried and
+    the attractor closest to the recording is kept (a symmetric nominal model has
+    mirror-image attractors; which one the rig sits on is history, not physics).
+    Replicates with slightly perturbed initial conditions and other sensor noise
+    give the noise scale of every statistic (in chaotic regimes this is the
+    trajectory-to-trajectory spread).
+
+    Returns
+    -------
+    model : Model
+    nominal : CandidateFit
+        The nominal model scored on the validation draw (``gap_before``).
+    n_sims : int
+    """
+    import dataclasses
+
+    model = build_model(rec, an)
+    fx0 = Effects()
+    scan = [simulate_signature(model, fx0, ball_speed=v, noise_seed=seed) for v in BALL_SPEEDS]
+    gaps = [compare(model.real, s, {}, allow_mirror=True).total for s in scan]
+    order = np.argsort(gaps, kind="stable")
+    best = int(order[0])
+    model = dataclasses.replace(model, ball_speed=BALL_SPEEDS[best],
+                                alt_speed=BALL_SPEEDS[int(order[1])])
+    # the one constant r: the value whose simulated, analysed pooled r matches the
+    # recording's (the analysis' pooled r corrected for its own bias on this model)
+    obj = _Objective(model, lambda _: fx0, model.real.r_pooled, tol=0.0)
+    obj(0.0)
+    model = dataclasses.replace(model, params=model.params.replace(r=obj.r_at(0.0)))
+    reps = [scan[best]] + [
+        simulate_signature(model, fx0, ball_speed=model.ball_speed * (1 + 0.01 * j),
+                           noise_seed=seed + j) for j in range(1, N_REPLICATES)]
+    reps = [r if compare(model.real, r, {}).total <= compare(model.real, mirror(r), {}).total
+            else mirror(r) for r in reps]                  # all on the recording's side
+    model = model.with_rep_var(noise_scales(reps))
+    val = validation_signature(model, fx0)
+    nominal = CandidateFit(name="nominal", params={}, n_params=0, r=model.params.r,
+                           effects=fx0, gap=compare(model.real, val, model.rep_var),
+                           signature=val, n_sims=len(scan) + N_REPLICATES + 1 + obj.n_sims)
+    return model, nominal, nominal.n_sims
+
+
+def _parsimonious(fits: list[CandidateFit]) -> list[CandidateFit]:
+    """Move a simpler nested candidate ahead of the best when it is about as good."""
+    if len(fits) < 2 or fits[0].name not in NESTED:
+        return fits
+    simple = next((f for f in fits if f.name == NESTED[fits[0].name]), None)
+    best = fits[0]
+    if simple is not None and simple.gap.total <= PARSIMONY * best.gap.total + PENALTY * (
+            best.n_params - simple.n_params):
+        return [simple] + [f for f in fits if f is not simple]
+    return fits
+
+
+def _fit_item(item):
+    """Top-level worker for :func:`vidiscover.scale.parallel_map`."""
+    model, name, base, base_r = item
+    return fit_candidate(model, name, base, base_r)
+
+
+def _map(items, n_jobs, scheduler):
+    if n_jobs == 1 and scheduler is None:
+        return [_fit_item(i) for i in items]
+    try:
+        from ..scale import parallel_map
+    except ImportError:  # pragma: no cover - scale is part of the package
+        return [_fit_item(i) for i in items]
+    return parallel_map(_fit_item, items, n_jobs=n_jobs, scheduler=scheduler, progress=False)
+
+
+def diagnose(rec, *, seed: int = 0, n_jobs: int | None = None, scheduler=None,
+             candidates=None, an=None) -> GapReport:
+    """Diagnose the sim-to-real gap of a recording against the nominal model.
+
+    Parameters
+    ----------
+    rec : Recording
+        The "real" side.
+    seed : int
+        Sensor-noise seeds of the nominal replicates (the simulated side); the same
+        seed gives the same report.
+    n_jobs : int, optional
+        Worker processes for the candidate fits (None: all cores; 1: in-process).
+    scheduler : str or distributed.Client, optional
+        Dask scheduler for the candidate fits.
+    candidates : sequence of str, optional
+        Catalogue effects to try (default: all of :data:`~vidiscover.gap.fit.CANDIDATES`).
+    an : AnalysisResult, optional
+        The recording's analysis, if already computed.
+
+    Returns
+    -------
+    GapReport
+
+    Raises
+    ------
+    InputError
+        For an unknown candidate name.
+    """
+    names = list(CANDIDATES) if candidates is None else list(candidates)
+    unknown = [n for n in names if n not in CANDIDATES]
+    if unknown:
+        raise InputError(f"unknown gap candidate(s) {', '.join(unknown)}; "
+                         f"known: {', '.join(CANDIDATES)}")
+    if not isinstance(seed, int) or seed < 0:
+        raise InputError(f"seed must be a non-negative integer, was {seed!r}")
+    model, nominal, n_sims = nominal_model(rec, an, seed=seed)
+    fx0 = Effects()
+    significant = nominal.gap.total > SIGNIFICANT_GAP
+    fits = [f for f in _map([(model, n, fx0, None) for n in names], n_jobs, scheduler)
+            if f is not None]
+    n_sims += sum(f.n_sims for f in fits)
+    fits = _parsimonious(sorted(fits, key=lambda c: c.score))
+    selected: list[CandidateFit] = []
+    if significant and fits and fits[0].score < nominal.score:
+        best = fits[0]
+        selected.append(best)
+        if best.gap.total > SIGNIFICANT_GAP:
+            # forward selection over the effects that removed something on their own
+            rest = [f.name for f in fits[1:]
+                    if f.gap.total < nominal.gap.total - max(PENALTY, 0.05 * nominal.gap.total)]
+            seconds = [f for f in _map([(model, n, best.effects, best.r) for n in rest],
+                                       n_jobs, scheduler) if f is not None]
+            n_sims += sum(f.n_sims for f in seconds)
+            seconds.sort(key=lambda c: c.score)
+            if seconds:
+                s = seconds[0]
+                removed = best.score - s.score
+                if removed > SECOND_EFFECT_SHARE * (best.gap.total - NULL_GAP) and \
+                        removed > PENALTY:
+                    selected.append(s)
+    cis = {}
+    for c in selected:
+        cis[c.name] = profile_ci(model, c)
+        n_sims += 1 + 2 * len(c.params)
+    return GapReport(name=rec.name, model=model, nominal=nominal, candidates=fits,
+                     selected=selected, significant=significant, n_sims=n_sims, cis=cis)

@@ -1,0 +1,536 @@
+"""Which effect: add one catalogue effect to a model, fit its parameters, re-measure.
+
+Every candidate is low-dimensional and fitted the cheapest honest way:
+
+* closed form where the analysis measures the parameter directly, followed by one
+  correction step through the simulator (``asymmetric_restitution``: per-wall RMS;
+  ``velocity_dependent_restitution``: per-wall regression of r on the impact speed;
+  ``excitation_distortion``: harmonics of the measured base motion);
+* a coarse grid and a golden-section refinement of the total gap otherwise
+  (``coulomb_friction``, ``inclination``, ``clearance_error``), the one constant r of
+  the model being re-fitted at every trial (a nuisance parameter shared by all
+  candidates, so it never favours one);
+* sensor effects (``sensor_resonance``, ``contact_duration``) change only the
+  acquisition: the model's motion is simulated once and only re-recorded.
+
+The fitted model is finally scored on a *validation replicate* (other initial
+conditions and sensor noise than the fit used), and its score carries a penalty of
+``PENALTY`` per parameter, so an extra parameter cannot win by itself.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..effects import Effects
+from ..params import G_ACCEL, SystemParams
+from .components import GapComponents, Signature, compare, measure, mirror
+
+__all__ = ["Model", "CandidateFit", "CANDIDATES", "PENALTY", "fit_candidate",
+           "simulate_signature", "validation_signature", "BALL_SPEEDS", "symmetric",
+           "gap_of", "profile_ci"]
+
+#: Score penalty per fitted parameter (AIC-like: a gap of ~1 per statistic is noise).
+PENALTY = 2.0
+#: Initial ball speeds (m/s) scanned to find the attractor the recording is on.
+BALL_SPEEDS = (0.6, 0.45, 0.75, 0.52)
+#: The validation draw: (relative change of the initial ball speed, sensor-noise seed).
+VALIDATION = (1.005, 100)
+
+
+@dataclass(frozen=True, eq=False)
+class Model:
+    """The nominal model of one recording plus what is needed to compare with it.
+
+    Attributes
+    ----------
+    params : SystemParams
+        Metadata parameters, fitted base amplitude/frequency, ``r`` = pooled r.
+    phase : float
+        Base phase at the first sample (rad): the simulation settles so that its
+        base sine has this phase when the record starts.
+    duration : float
+        Record length (s).
+    sample_rate : float
+        Hz.
+    noise : tuple
+        (x_noise m, a_noise m/s^2, xe_noise m) estimated from the recording.
+    real : Signature
+        The recording's statistics.
+    rep_var : dict
+        Replicate variance of every statistic (nominal model).
+    settle : float
+        Settling time before the record (s).
+    ball_speed : float
+        Initial ball speed (m/s) of the simulations: the one of :data:`BALL_SPEEDS`
+        whose nominal attractor is closest to the recording.
+    alt_speed : float
+        The runner-up initial ball speed (a second validation draw, in case a
+        fitted model lands on another attractor than the nominal one).
+    """
+
+    params: SystemParams
+    phase: float
+    duration: float
+    sample_rate: float
+    noise: tuple
+    real: Signature = field(repr=False)
+    rep_var: dict = field(default_factory=dict, repr=False)
+    settle: float = 20.0
+    ball_speed: float = 0.6
+    alt_speed: float = 0.45
+
+    def with_rep_var(self, rep_var: dict) -> Model:
+        """A copy with replicate variances."""
+        return dataclasses.replace(self, rep_var=rep_var)
+
+
+def _simulate(model: Model, effects: Effects, r: float, ball_speed: float | None = None):
+    from ..simulation import simulate
+
+    T = 1.0 / model.params.frequency
+    frac = (model.phase / (2 * math.pi) + 0.5) % 1.0 - 0.5    # in [-1/2, 1/2)
+    settle = model.settle + frac * T
+    p = model.params.replace(r=float(min(1.0, max(0.0, r))))
+    return simulate(p, effects, settle=settle, duration=model.duration,
+                    ball_speed=model.ball_speed if ball_speed is None else ball_speed)
+
+
+def _record(model: Model, result, noise_seed: int) -> Signature:
+    from ..sensors import SensorConfig, record
+
+    xn, an, en = model.noise
+    cfg = SensorConfig(sample_rate=model.sample_rate, x_noise=xn, a_noise=an, xe_noise=en)
+    rec, _ = record(result, cfg, seed=1000 + noise_seed)
+    return measure(rec)
+
+
+def simulate_signature(model: Model, effects: Effects, r: float | None = None, *,
+                       ball_speed: float | None = None, noise_seed: int = 0) -> Signature:
+    """Simulate ``effects`` on the model, record it like the real one and measure it.
+
+    Parameters
+    ----------
+    model : Model
+    effects : Effects
+    r : float, optional
+        The one constant r (default ``model.params.r``).
+    ball_speed : float, optional
+        Initial ball speed (m/s); default ``model.ball_speed``.
+    noise_seed : int
+        Seed of the sensor noise.
+
+    Returns
+    -------
+    Signature
+    """
+    r = model.params.r if r is None else r
+    return _record(model, _simulate(model, effects, r, ball_speed), noise_seed)
+
+
+@dataclass(frozen=True, eq=False)
+class CandidateFit:
+    """One candidate effect, fitted.
+
+    Attributes
+    ----------
+    name : str
+        Effect name (or ``"nominal"``).
+    params : dict
+        Fitted parameters of the effect.
+    n_params : int
+        Parameters counted in the penalty.
+    r : float
+        The model's constant r after refitting.
+    effects : Effects
+        All effects of the fitted model (base effects included).
+    gap : GapComponents
+        Gap of the fitted model on the validation replicate.
+    signature : Signature
+        Validation replicate's statistics.
+    n_sims : int
+        Simulations spent.
+    """
+
+    name: str
+    params: dict
+    n_params: int
+    r: float
+    effects: Effects
+    gap: GapComponents = field(repr=False)
+    signature: Signature = field(repr=False)
+    n_sims: int = 0
+
+    @property
+    def score(self) -> float:
+        """Validated gap plus the parameter penalty."""
+        return self.gap.total + PENALTY * self.n_params
+
+
+def symmetric(effects: Effects) -> bool:
+    """The model is mirror-symmetric (see :func:`~vidiscover.gap.components.mirror`)."""
+    if effects.theta_deg != 0 or "restitution_drift" in effects:
+        return False
+    if "excitation_distortion" in effects and effects.value("excitation_distortion",
+                                                            "h2") > 0:
+        return False
+    laws = effects.restitution_laws(0.5)
+    return laws["right"] == laws["left"]
+
+
+def gap_of(model: Model, sig: Signature, effects: Effects) -> GapComponents:
+    """Gap of a simulated signature, mirror-aligned when the model is symmetric."""
+    return compare(model.real, sig, model.rep_var, allow_mirror=symmetric(effects))
+
+
+def _sets_r(effects: Effects) -> bool:
+    return "asymmetric_restitution" in effects or "velocity_dependent_restitution" in effects
+
+
+class _Objective:
+    """Total gap of a 1-parameter family, re-fitting the nuisance r at each trial."""
+
+    def __init__(self, model: Model, make_effects, r0: float, tol: float = 0.004) -> None:
+        self.model, self.make, self.bias, self.tol = model, make_effects, 0.0, tol
+        self.r0 = r0
+        self.n_sims = 0
+        self.cache: dict[float, tuple[float, float]] = {}
+
+    def __call__(self, theta: float) -> float:
+        key = round(float(theta), 12)
+        if key in self.cache:
+            return self.cache[key][0]
+        fx = self.make(theta)
+        real = self.model.real
+        r = self.r0
+        if _sets_r(fx) or not np.isfinite(real.r_pooled):
+            sig = simulate_signature(self.model, fx, r)
+            self.n_sims += 1
+        else:
+            r = float(np.clip(real.r_pooled + self.bias, 0.02, 1.0))
+            sig = simulate_signature(self.model, fx, r)
+            self.n_sims += 1
+            if np.isfinite(sig.r_pooled) and abs(sig.r_pooled - real.r_pooled) > self.tol:
+                r = float(np.clip(r + real.r_pooled - sig.r_pooled, 0.02, 1.0))
+                sig = simulate_signature(self.model, fx, r)
+                self.n_sims += 1
+            if np.isfinite(sig.r_pooled):
+                self.bias = r - sig.r_pooled
+        g = gap_of(self.model, sig, fx).total
+        self.cache[key] = (g, r)
+        return g
+
+    def r_at(self, theta: float) -> float:
+        return self.cache[round(float(theta), 12)][1]
+
+
+def _minimise_1d(f, lo: float, hi: float, n_grid: int = 5, n_golden: int = 4) -> float:
+    """Grid over [lo, hi] then golden-section refinement around the best point."""
+    grid = np.linspace(lo, hi, n_grid)
+    vals = [f(x) for x in grid]
+    k = int(np.argmin(vals))
+    a, b = grid[max(k - 1, 0)], grid[min(k + 1, n_grid - 1)]
+    g = (math.sqrt(5) - 1) / 2
+    c, d = b - g * (b - a), a + g * (b - a)
+    fc, fd = f(c), f(d)
+    for _ in range(n_golden):
+        if fc < fd:
+            b, d, fd = d, c, fc
+            c = b - g * (b - a)
+            fc = f(c)
+        else:
+            a, c, fc = c, d, fd
+            d = a + g * (b - a)
+            fd = f(d)
+    cands = [(vals[k], grid[k]), (fc, c), (fd, d)]
+    return float(min(cands)[1])
+
+
+# ----------------------------------------------------------------------------- fitters
+def _fit_asymmetric(model: Model, base: Effects):
+    real = model.real
+    rr = real.values.get("right.r_level", math.nan)
+    rl = real.values.get("left.r_level", math.nan)
+    rr = rr if np.isfinite(rr) else real.r_pooled
+    rl = rl if np.isfinite(rl) else real.r_pooled
+    if not (np.isfinite(rr) and np.isfinite(rl)):
+        return None
+    p = {"r_right": float(np.clip(rr, 0, 1)), "r_left": float(np.clip(rl, 0, 1))}
+    n = 0
+    for _ in range(2):
+        sig = simulate_signature(model, base.with_effect("asymmetric_restitution", **p))
+        n += 1
+        for side in ("right", "left"):
+            s, t = sig.values.get(f"{side}.r_level"), real.values.get(f"{side}.r_level")
+            if s is not None and t is not None and np.isfinite(s) and np.isfinite(t):
+                p[f"r_{side}"] = float(np.clip(p[f"r_{side}"] + t - s, 0.0, 1.0))
+    return p, 2, model.params.r, n
+
+
+def _wall_law(imp: dict, sgn: int, fallback: float) -> tuple[float, float]:
+    """(r0, a) of r = r0 - a v on one wall, within the registry's r0 in [0, 1], a >= 0."""
+    sel = imp["side"] == sgn
+    v, r = imp["speed"][sel], imp["r"][sel]
+    if v.size < 8 or np.std(v) < 0.05 * max(np.mean(v), 1e-9):
+        return (float(np.sqrt(np.mean(r ** 2))) if r.size else fallback), 0.0
+    a, c = np.polyfit(v, r, 1)
+    a = -float(a)
+    if a < 0:                                    # r grows with the speed: no such law
+        return float(np.sqrt(np.mean(r ** 2))), 0.0
+    if c > 1.0:                                  # keep r0 <= 1: refit a with r0 = 1
+        return 1.0, float(max(np.sum(v * (1 - r)) / np.sum(v * v), 0.0))
+    return float(c), a
+
+
+def _law_spec(r0: float, a: float) -> str:
+    return f"linear:{min(max(r0, 0.0), 1.0):.6g}:{max(a, 0.0):.6g}"
+
+
+def _fit_velocity(model: Model, base: Effects):
+    real = model.real
+    if not np.isfinite(real.r_pooled):
+        return None
+    laws = {"right": _wall_law(real.impacts, 1, real.r_pooled),
+            "left": _wall_law(real.impacts, -1, real.r_pooled)}
+    n = 0
+    p: dict = {}
+    for _ in range(2):
+        p = {s: _law_spec(*laws[s]) for s in laws}
+        fx = base.with_effect("velocity_dependent_restitution", **p)
+        sig = simulate_signature(model, fx)
+        n += 1
+        for side in ("right", "left"):
+            s, t = sig.values.get(f"{side}.r_level"), real.values.get(f"{side}.r_level")
+            if s is not None and t is not None and np.isfinite(s) and np.isfinite(t):
+                laws[side] = (laws[side][0] + t - s, laws[side][1])
+    p = {s: _law_spec(*laws[s]) for s in laws}
+    return p, 4, model.params.r, n
+
+
+def _fit_1d(model: Model, base: Effects, name: str, key: str, lo: float, hi: float,
+            transform=float, n_grid: int = 5):
+    obj = _Objective(model, lambda th: base.with_effect(name, **{key: transform(th)}),
+                     model.real.r_pooled)
+    best = _minimise_1d(obj, lo, hi, n_grid=n_grid)
+    return {key: transform(best)}, 1, obj.r_at(best), obj.n_sims
+
+
+def _fit_friction(model: Model, base: Effects):
+    return _fit_1d(model, base, "coulomb_friction", "mu", 0.0, 0.6, n_grid=7)
+
+
+def _fit_inclination(model: Model, base: Effects):
+    # closed-form start: the momentum residual at a wall is ~ g sin(theta) x the mean
+    # flight time; the attractor can jump between nearby angles, so the search
+    # stays within +/- 2.5 deg of it (the full range when it is not available)
+    v, ft = model.real.values, model.real.flight_time
+    e = np.nanmean([v.get("right.momentum", math.nan), v.get("left.momentum", math.nan)])
+    if np.isfinite(e) and np.isfinite(ft) and ft > 0:
+        th0 = math.degrees(math.asin(float(np.clip(e / (G_ACCEL * ft), -0.5, 0.5))))
+        return _fit_1d(model, base, "inclination", "theta", max(th0 - 2.5, -30.0),
+                       min(th0 + 2.5, 30.0))
+    return _fit_1d(model, base, "inclination", "theta", -12.0, 12.0)
+
+
+def _fit_clearance(model: Model, base: Effects):
+    b = model.params.b
+    return _fit_1d(model, base, "clearance_error", "db", -0.3 * b, 0.3 * b, n_grid=9)
+
+
+def _fit_excitation(model: Model, base: Effects):
+    v = model.real.values
+    p, n_par = {}, 0
+    for n in (2, 3):
+        c = complex(v.get(f"excitation.h{n}", 0.0), v.get(f"excitation.h{n}s", 0.0))
+        h = min(abs(c), 0.5)
+        p[f"h{n}"] = float(h)
+        p[f"phi{n}"] = float(math.atan2(c.imag, c.real)) if h > 0 else 0.0
+        n_par += 2
+    return p, n_par, model.params.r, 0
+
+
+class _SensorObjective:
+    """Gap of re-recordings of one simulated motion with a sensor effect."""
+
+    def __init__(self, model: Model, base: Effects, r: float) -> None:
+        self.model = model
+        self.result = _simulate(model, base, r)
+        self.base = base
+
+    def signature(self, name: str, **params) -> Signature:
+        fx = self.base.with_effect(name, **params)
+        res = dataclasses.replace(self.result, effects=fx)
+        return _record(self.model, res, 0)
+
+    def gap(self, name: str, **params) -> float:
+        fx = self.base.with_effect(name, **params)
+        return gap_of(self.model, self.signature(name, **params), fx).total
+
+    def own_gap(self, prefix: str) -> float:
+        """Gap of the base model on the statistics starting with ``prefix``."""
+        sig = _record(self.model, self.result, 0)
+        g = gap_of(self.model, sig, self.base)
+        return sum(v for k, v in g.per_stat.items() if k.startswith(prefix))
+
+
+#: Below this gap on its own statistics a sensor effect has nothing to explain and is
+#: not searched (it is still validated and scored, at its smallest setting).
+_SENSOR_QUIET = 6.0
+
+
+def _fit_contact(model: Model, base: Effects):
+    so = _SensorObjective(model, base, model.params.r)
+    if so.own_gap("sensors.pulse_width") < _SENSOR_QUIET:
+        return {"tau": 2e-5}, 1, model.params.r, 1
+    lo, hi = math.log(2e-5), math.log(4e-3)
+    best = _minimise_1d(lambda u: so.gap("contact_duration", tau=math.exp(u)), lo, hi,
+                        n_grid=7, n_golden=6)
+    return {"tau": float(math.exp(best))}, 1, model.params.r, 1
+
+
+def _fit_resonance(model: Model, base: Effects):
+    so = _SensorObjective(model, base, model.params.r)
+    if so.own_gap("sensors.residual") < _SENSOR_QUIET:
+        return {"f_s": 2000.0, "zeta_s": 0.7}, 2, model.params.r, 1
+    nominal = so.result
+    from ..sensors import SensorConfig, record
+
+    xn, an, en = model.noise
+    cfg = SensorConfig(sample_rate=model.sample_rate, x_noise=xn, a_noise=an, xe_noise=en)
+    rec, _ = record(nominal, cfg, seed=1000)
+    ref = measure(rec).residual_psd
+    f, psd = model.real.residual_psd
+    ratio = psd / np.maximum(ref[1], 1e-300)
+    band = (f >= 25.0) & (f <= min(2500.0, 0.45 * model.sample_rate))
+    if not band.any():
+        return None
+    f_s = float(f[band][np.argmax(ratio[band])])
+    zl = _minimise_1d(lambda u: so.gap("sensor_resonance", f_s=f_s, zeta_s=math.exp(u)),
+                      math.log(0.003), math.log(0.5), n_grid=6, n_golden=5)
+    zeta = float(math.exp(zl))
+    df = f[1] - f[0]
+    fl = _minimise_1d(lambda x: so.gap("sensor_resonance", f_s=x, zeta_s=zeta),
+                      max(20.0, f_s - df), f_s + df, n_grid=3, n_golden=4)
+    return {"f_s": float(fl), "zeta_s": zeta}, 2, model.params.r, 1
+
+
+#: Candidate name -> fitter(model, base_effects) -> (params, n_params, r, n_sims) or None.
+CANDIDATES = {
+    "asymmetric_restitution": _fit_asymmetric,
+    "velocity_dependent_restitution": _fit_velocity,
+    "coulomb_friction": _fit_friction,
+    "inclination": _fit_inclination,
+    "sensor_resonance": _fit_resonance,
+    "excitation_distortion": _fit_excitation,
+    "clearance_error": _fit_clearance,
+    "contact_duration": _fit_contact,
+}
+
+
+def validation_signature(model: Model, effects: Effects, r: float | None = None
+                         ) -> Signature:
+    """The validation draw of a model.
+
+    The better of two draws with other initial conditions and sensor noise than the
+    fit used (see :data:`VALIDATION`).
+    """
+    draws = [simulate_signature(model, effects, r, ball_speed=v * VALIDATION[0],
+                                noise_seed=VALIDATION[1])
+             for v in (model.ball_speed, model.alt_speed)]
+    if symmetric(effects):
+        draws += [mirror(d) for d in draws]
+    gaps = [compare(model.real, d, model.rep_var).total for d in draws]
+    return draws[int(np.argmin(gaps))]
+
+
+def fit_candidate(model: Model, name: str, base: Effects | None = None,
+                  base_r: float | None = None) -> CandidateFit | None:
+    """Add effect ``name`` to ``base``, fit it, and score it on the validation replicate.
+
+    Parameters
+    ----------
+    model : Model
+        Nominal model of the recording (with replicate variances).
+    name : str
+        A catalogue effect (:data:`CANDIDATES`).
+    base : Effects, optional
+        Effects already in the model (forward selection).
+    base_r : float, optional
+        The constant r of the base model (default ``model.params.r``).
+
+    Returns
+    -------
+    CandidateFit or None
+        None when the effect cannot be fitted on this recording (e.g. no impacts).
+    """
+    base = base if base is not None else Effects()
+    if base_r is not None:
+        model = dataclasses.replace(model, params=model.params.replace(r=base_r))
+    out = CANDIDATES[name](model, base)
+    if out is None:
+        return None
+    params, n_params, r, n_sims = out
+    fx = base.with_effect(name, **params)
+    sig = validation_signature(model, fx, r)
+    gap = compare(model.real, sig, model.rep_var)
+    return CandidateFit(name=name, params=dict(fx.active[name]), n_params=n_params, r=r,
+                        effects=fx, gap=gap, signature=sig, n_sims=n_sims + 2)
+
+
+def profile_ci(model: Model, fit: CandidateFit, level_delta: float = 3.84,
+               rel_step: float = 0.1) -> dict:
+    """Approximate 95 % intervals of the fitted numeric parameters of ``fit``.
+
+    The total gap is a sum of squared z-scores, so near its minimum it behaves like
+    a chi-square: each parameter is stepped by +/- ``rel_step`` of its value (or of
+    its validity range when the value is ~0), the curvature of the gap gives the
+    half-width where it rises by ``level_delta`` (3.84: 95 %, one parameter, the
+    others held). String parameters (restitution-law specs) get no interval.
+
+    Returns
+    -------
+    dict
+        Parameter -> [low, high], or None when the gap is flat (not determined).
+    """
+    from ..effects import EFFECTS
+
+    spec = EFFECTS[fit.name]
+    base = fit.effects.without(fit.name)
+    g0 = gap_of(model, simulate_signature(model, fit.effects, fit.r), fit.effects).total
+    out: dict = {}
+    for key, value in fit.params.items():
+        if not isinstance(value, (int, float)) or isinstance(value, bool):
+            out[key] = None
+            continue
+        h = rel_step * abs(value) if abs(value) > 1e-9 else 1e-3
+        gs = []
+        for v in (value - h, value + h):
+            params = dict(fit.params)
+            params[key] = v
+            try:
+                fx = base.with_effect(fit.name, **params)
+            except Exception:  # outside the validity range: one-sided
+                gs.append(None)
+                continue
+            gs.append(gap_of(model, simulate_signature(model, fx, fit.r), fx).total)
+        if None in gs:
+            g = [x for x in gs if x is not None]
+            a = (g[0] - g0) / h ** 2 if g else 0.0
+        else:
+            a = (gs[0] + gs[1] - 2 * g0) / (2 * h ** 2)
+        if not a > 0:
+            out[key] = None
+            continue
+        half = math.sqrt(level_delta / a)
+        lo, hi = value - half, value + half
+        check = spec.checks[key]
+        doc = check.__doc__ or ""
+        if doc.startswith(("[", "(")):
+            rng = doc.strip("[]()").split(",")
+            lo, hi = max(lo, float(rng[0])), min(hi, float(rng[1]))
+        out[key] = [float(lo), float(hi)]
+    return out
