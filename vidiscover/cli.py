@@ -72,18 +72,28 @@ def _fmt(value, digits: int = 3) -> str:
     return f"{value:.{digits}f}"
 
 
+def parse_assignments(items, option: str) -> dict[str, float]:
+    """``NAME=VALUE`` option values as ``{name: float}``, with one-line errors.
+
+    >>> parse_assignments(["m2=0.05", "b = 0.009"], "--param")
+    {'m2': 0.05, 'b': 0.009}
+    """
+    out: dict[str, float] = {}
+    for item in items:
+        name, eq, value = item.partition("=")
+        if not eq:
+            raise InputError(f"{option} {item!r}: expected NAME=VALUE, e.g. {option} m2=0.05")
+        try:
+            out[name.strip()] = float(value)
+        except ValueError:
+            raise InputError(f"{option} {item!r}: VALUE must be a number") from None
+    return out
+
+
 def _parse_params(preset_name: str, b: float | None, param: tuple[str, ...]):
     from .params import preset
 
-    changes: dict[str, float] = {}
-    for item in param:
-        name, eq, value = item.partition("=")
-        if not eq:
-            raise InputError(f"--param {item!r}: expected NAME=VALUE, e.g. --param m2=0.05")
-        try:
-            changes[name.strip()] = float(value)
-        except ValueError:
-            raise InputError(f"--param {item!r}: VALUE must be a number") from None
+    changes = parse_assignments(param, "--param")
     if b is not None:
         changes["b"] = b
     return preset(preset_name, **changes)

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 import numpy as np
 import pandas as pd
 
+from .._atomic import to_jsonable
 from ..errors import InputError
 from .impacts import ImpactDetection, detect_impacts
 from .reconstruction import Reconstruction, reconstruct
@@ -26,24 +27,6 @@ from .returnmap import FeatureContext, ReturnMap, compute_features, return_map
 from .signals import Forcing, fit_forcing
 
 __all__ = ["AnalysisResult", "analyze"]
-
-
-def _clean(value):
-    """JSON-ready copy: numpy scalars to Python, NaN/inf to None."""
-    if isinstance(value, dict):
-        return {str(k): _clean(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_clean(v) for v in value]
-    if isinstance(value, np.ndarray):
-        return [_clean(v) for v in value.tolist()]
-    if isinstance(value, (np.bool_, bool)):
-        return bool(value)
-    if isinstance(value, (np.integer,)):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        v = float(value)
-        return v if math.isfinite(v) else None
-    return value
 
 
 @dataclass(frozen=True, eq=False)
@@ -108,7 +91,7 @@ class AnalysisResult:
         det = self.detection
         side = det.side
         fc = self.reconstruction.flight_columns
-        return _clean({
+        return to_jsonable({
             "recording": self.name,
             "b": self.b,
             "mu": self.mu,

@@ -125,18 +125,10 @@ def _report_text(report: dict) -> str:
 
 
 def _base_params(preset_name: str, changes: tuple[str, ...]):
+    from ..cli import parse_assignments
     from ..params import preset
 
-    fixed: dict[str, float] = {}
-    for item in changes:
-        name, eq, value = item.partition("=")
-        if not eq:
-            raise InputError(f"--set {item!r}: expected NAME=VALUE, e.g. --set m2=0.05")
-        try:
-            fixed[name.strip()] = float(value)
-        except ValueError:
-            raise InputError(f"--set {item!r}: VALUE must be a number") from None
-    return preset(preset_name, **fixed)
+    return preset(preset_name, **parse_assignments(changes, "--set"))
 
 
 def _sweep_values(start: float, stop: float, n: int, log: bool):

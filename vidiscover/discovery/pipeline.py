@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from .._atomic import to_jsonable
 from ..analysis import AnalysisResult, analyze
 from ..errors import InputError
 from ..recording import Recording
@@ -55,23 +56,6 @@ __all__ = ["DiscoveryResult", "discover", "SIDES", "IMPACT_DATA_COLUMNS"]
 SIDES = ("right", "left")
 #: Columns of :attr:`DiscoveryResult.impact_data` tables.
 IMPACT_DATA_COLUMNS = ("recording", "group", "t", "v", "r", "sigma")
-
-
-def _clean(value: Any) -> Any:
-    """JSON-ready copy: numpy scalars to Python, NaN/inf to None."""
-    if isinstance(value, Mapping):
-        return {str(k): _clean(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple, np.ndarray)):
-        return [_clean(v) for v in (value.tolist() if isinstance(value, np.ndarray)
-                                    else value)]
-    if isinstance(value, (bool, np.bool_)):
-        return bool(value)
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, (float, np.floating)):
-        v = float(value)
-        return v if math.isfinite(v) else None
-    return value
 
 
 @dataclass(frozen=True, eq=False)
@@ -136,7 +120,7 @@ class DiscoveryResult:
         ``mu_assumed``, ``mu_impacts`` (mu of the analyses behind the impact laws),
         ``warnings``. NaN becomes None.
         """
-        return _clean({
+        return to_jsonable({
             "recordings": list(self.recordings),
             "n_recordings": len(self.recordings),
             "mu_assumed": self.mu,
