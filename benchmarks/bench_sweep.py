@@ -62,16 +62,24 @@ def main() -> None:
     ap.add_argument("--sample", type=int, default=40, help="points timed stage by stage")
     ap.add_argument("--skip-serial", action="store_true")
     ap.add_argument("--skip-dask", action="store_true")
+    ap.add_argument("--no-classify", action="store_true",
+                    help="skip the regime classifier (issue 5 times simulate + analyze + "
+                         "classify)")
     args = ap.parse_args()
 
     from vidiscover.sweep import sweep
 
     values = np.linspace(0.003, 0.03, args.n)
     kw = dict(settle=args.settle, duration=args.duration, seed=0, progress=False)
+    if not args.no_classify:
+        from vidiscover.regimes.classifier import load_default_model
+
+        kw["classify"] = load_default_model()
     print(f"machine: {platform.platform()}, {os.cpu_count()} cpus, python "
           f"{platform.python_version()}; load average {os.getloadavg()[0]:.2f} (1 min)")
     print(f"sweep: b = 3-30 mm, {args.n} points, settle {args.settle:g} s + record "
-          f"{args.duration:g} s each, analyze(n_boot=0); target <= {TARGET_S:g} s on "
+          f"{args.duration:g} s each, analyze(n_boot=0)"
+          f"{'' if args.no_classify else ' + classify'}; target <= {TARGET_S:g} s on "
           f"{args.workers} cores\n")
 
     _stage_times(values[:1], args.settle, args.duration, 1)  # imports, first calls
@@ -131,6 +139,11 @@ def main() -> None:
         print(f"rows {name} vs {ref_name}: {same}")
     labels = results[ref_name]["label"].value_counts()
     print("labels: " + ", ".join(f"{k} {v}" for k, v in labels.items()))
+    if "label_pred" in results[ref_name] and results[ref_name]["label_pred"].notna().any():
+        df = results[ref_name]
+        agree = (df["label"] == df["label_pred"]).mean()
+        print(f"classifier agrees with the true label on {agree:.1%}"
+              " of the points")
     print(f"load average at the end: {os.getloadavg()[0]:.2f} (1 min)")
 
 

@@ -282,3 +282,18 @@ def test_cli_sweep_classify_fills_predicted_labels(tmp_path):
     assert all(r["label_pred"] in LABELS for r in doc["rows"])
     agree = [r["label_pred"] == r["label"] for r in doc["rows"]]
     assert doc["label_agreement"] == pytest.approx(sum(agree) / len(agree))
+
+
+def test_regime_model_labels_in_one_batch_like_point_by_point():
+    """The batched labelling of a RegimeModel equals calling it on every point."""
+    from vidiscover.regimes.classifier import load_default_model
+    from vidiscover.sweep import sweep
+
+    model = load_default_model()
+    values = np.linspace(0.004, 0.028, 6)
+    batch = sweep("b", values, classify=model, n_jobs=1, progress=False, settle=6.0,
+                  duration=2.56)
+    one = sweep("b", values, classify=lambda ana: model(ana), n_jobs=1, progress=False,
+                settle=6.0, duration=2.56)
+    assert list(batch["label_pred"]) == list(one["label_pred"])
+    assert set(batch["label_pred"]) <= set(LABELS)
