@@ -98,3 +98,22 @@ def test_demo_command_full_size(runner, tmp_path):
     doc = json.loads(res.stdout)
     assert "index.html" in doc["outputs"] and len(doc["recordings"]) == 5
     assert all((tmp_path / "d" / f).is_file() for f in doc["outputs"])
+
+
+def test_demo_prints_one_line_per_clearance(runner, tmp_path, monkeypatch):
+    """Human output: where the index is, then classified vs true regime and r per wall."""
+    import vidiscover.demo as demo_mod
+
+    real = demo_mod.run_demo
+
+    def small(out, seed=0, progress=True):
+        return real(out, seed=seed, progress=False, clearances_mm=(9.0,), settle=4.0,
+                    duration=2.0, figures=False)
+
+    monkeypatch.setattr(demo_mod, "run_demo", small)
+    res = runner.invoke(main, ["demo", "--out", str(tmp_path / "d")])
+    assert res.exit_code == 0, res.output
+    lines = res.output.strip().splitlines()
+    assert "index.html" in lines[0]
+    assert len(lines) == 2 and lines[1].strip().startswith("paper_b9mm:")
+    assert "(true " in lines[1] and "r right" in lines[1] and "r left" in lines[1]
