@@ -40,7 +40,8 @@ def main() -> None:
           f"{platform.python_version()}; {args.runs} runs each (median, best)")
     res = {k: _time(v, args.runs) for k, v in cases.items()}
     for k, v in res.items():
-        print(f"  {k:32s} median {statistics.median(v) * 1e3:7.1f} ms   best {min(v) * 1e3:7.1f} ms")
+        med, best = statistics.median(v) * 1e3, min(v) * 1e3
+        print(f"  {k:32s} median {med:7.1f} ms   best {best:7.1f} ms")
     help_t = statistics.median(res["vidiscover --help"])
     print(f"vidiscover --help: {help_t:.3f} s vs target 0.5 s -> "
           f"{'OK' if help_t <= 0.5 else 'MISSED'} (ratio {help_t / 0.5:.2f} of the budget)")
