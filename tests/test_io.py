@@ -427,6 +427,10 @@ def test_directory_instead_of_file(tmp_path):
     (tmp_path / "d.csv").mkdir()
     with pytest.raises(InputError, match=r"d\.csv: is a directory"):
         read_recording(tmp_path / "d.csv")
+    # a directory without a suffix is named as a directory, not as an unknown format
+    (tmp_path / "runs").mkdir()
+    with pytest.raises(InputError, match=r"runs: is a directory, not a recording file"):
+        read_recording(tmp_path / "runs")
 
 
 def test_unknown_format(tmp_path):

@@ -65,6 +65,27 @@ def _json_default(obj):
     raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
+def check_out_dir(out) -> Path:
+    """``--out`` as a Path, refused in one line when it exists and is not a directory.
+
+    Commands call this before any work so that a bad ``--out`` fails at once, not
+    after minutes of computation; the writer (:func:`vidiscover._atomic.atomic_directory`)
+    checks again when it writes.
+    """
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"--out {out}: exists and is not a directory; choose another --out")
+    return out
+
+
+def recording_paths(paths) -> list[Path]:
+    """The RECORDINGS arguments as Paths; one-line error when there are none."""
+    paths = [Path(p) for p in paths]
+    if not paths:
+        raise InputError("no recording given; pass one or more recording files")
+    return paths
+
+
 def _fmt(value, digits: int = 3) -> str:
     """A number for human output ('n/a' for None/NaN)."""
     if value is None or value != value:

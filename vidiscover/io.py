@@ -246,6 +246,9 @@ def read_recording(path: str | os.PathLike, meta: Any = None) -> Recording:
     write_recording : the inverse.
     """
     path = Path(path)
+    if path.is_dir():               # before the suffix check: 'unknown format' would mislead
+        raise InputError(f"{path}: is a directory, not a recording file; pass the recording "
+                         "file (rec.csv, .parquet or .npz)")
     fmt = _format_of(path)
     data = _read_bytes(path, "recording file", "check the path")
     if not data.strip() or data.strip() == b"\xef\xbb\xbf":

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import click
 
-from ..cli import emit, handle_errors
+from ..cli import check_out_dir, emit, handle_errors, recording_paths
 from ..errors import InputError
 
 __all__ = ["analyze", "run_analyze", "human_lines"]
@@ -57,9 +57,6 @@ def _load(path: Path, meta: Path | None):
     """(Recording, truth or None) of one file; every problem is an InputError."""
     from ..io import read_recording, read_truth
 
-    if path.is_dir():
-        raise InputError(f"{path}: is a directory, not a recording; pass the recording "
-                         "file (rec.csv, .parquet or .npz)")
     rec = read_recording(path, meta=meta)
     truth_file = path.with_name(f"{path.stem}.truth.json")
     truth = read_truth(truth_file) if truth_file.is_file() else None
@@ -147,12 +144,8 @@ def run_analyze(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
     if not (math.isfinite(theta_deg) and abs(theta_deg) < 90):
         raise InputError(f"--theta must be in (-90, 90) degrees, was {theta_deg!r}")
     law = (mu, float(theta_deg)) if theta_deg else None
-    paths = [Path(p) for p in paths]
-    if not paths:
-        raise InputError("no recording given; pass one or more recording files")
-    out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {out}: exists and is not a directory; choose another --out")
+    paths = recording_paths(paths)
+    out = check_out_dir(out)
     loaded = [_load(p, meta) for p in paths]          # check every input before writing
 
     def one(rec, truth, target: Path) -> dict:

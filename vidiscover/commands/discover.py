@@ -25,7 +25,7 @@ from pathlib import Path
 
 import click
 
-from ..cli import emit, handle_errors
+from ..cli import check_out_dir, emit, handle_errors, recording_paths
 from ..errors import InputError
 
 __all__ = ["discover", "run_discover", "human_lines"]
@@ -88,12 +88,8 @@ def run_discover(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
         raise InputError(f"--min-effect must be >= 0 (tolerance on r), was {min_effect!r}")
     if seed < 0:
         raise InputError(f"--seed must be >= 0, was {seed}")
-    paths = [Path(p) for p in paths]
-    if not paths:
-        raise InputError("no recording given; pass one or more recording files")
-    out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {out}: exists and is not a directory; choose another --out")
+    paths = recording_paths(paths)
+    out = check_out_dir(out)
     recordings = [read_recording(p, meta=meta) for p in paths]   # check all inputs first
     result = discover_laws(recordings, mu=mu, seed=seed, n_bootstrap=n_bootstrap,
                            criterion=criterion, flight=flight, progress=progress,

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import click
 
-from ..cli import emit, handle_errors
+from ..cli import check_out_dir, emit, handle_errors
 from ..errors import InputError
 
 __all__ = ["gap", "gap_check", "run_gap", "human_gap", "human_check"]
@@ -91,11 +91,7 @@ def run_gap(path: Path, out: Path, *, meta: Path | None = None, seed: int = 0,
     from ..gap import diagnose
     from ..io import read_recording
 
-    path, out = Path(path), Path(out)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {out}: exists and is not a directory; choose another --out")
-    if path.is_dir():
-        raise InputError(f"{path}: is a directory, not a recording; pass the recording file")
+    out = check_out_dir(out)
     rec = read_recording(path, meta=meta)
     report = diagnose(rec, seed=seed, n_jobs=n_jobs, scheduler=scheduler)
     doc = report.to_dict()
@@ -186,8 +182,8 @@ def gap_check(quick, seed, n_jobs, scheduler, out, as_json):
 
     if seed < 0:
         raise InputError(f"--seed must be >= 0, was {seed!r}")
-    if out is not None and Path(out).exists() and not Path(out).is_dir():
-        raise InputError(f"--out {out}: exists and is not a directory; choose another --out")
+    if out is not None:
+        check_out_dir(out)
     doc = run_check(quick=quick, seed=seed, n_jobs=_check_jobs(n_jobs), scheduler=scheduler,
                     progress=not as_json)
     if out is not None:
