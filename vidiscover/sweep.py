@@ -234,11 +234,9 @@ def _label_of(predicted: Any) -> str:
 
 def _run_point(task: tuple[SweepSpec, Callable | None, int]) -> dict:
     """Simulate, record, label and analyse one point (runs on a worker)."""
+    # importing vidiscover.analysis registers the regime features too, so every
+    # backend computes the same feature set
     from .analysis import analyze
-
-    # registers the regime features: every backend computes the same feature set,
-    # whatever the parent process happened to import
-    from .regimes import features as _regime_features  # noqa: F401
     from .regimes.labels import label_simulation
     from .sensors import SensorConfig, record
     from .simulation import simulate

@@ -35,7 +35,6 @@ from sklearn.utils.validation import check_is_fitted, validate_data
 from threadpoolctl import threadpool_limits
 
 from ..errors import InputError
-from . import features as _features  # noqa: F401  (registers the regime features)
 from .labels import LABELS
 
 __all__ = ["RegimeClassifier", "RuleBaseline", "RegimeModel", "Classification",

@@ -26,7 +26,6 @@ import numpy as np
 import pandas as pd
 
 from ..errors import InputError
-from . import features as _features  # noqa: F401  (registers the regime features)
 from .labels import LABELS
 
 __all__ = ["PARAM_RANGES", "Case", "draw_cases", "simulate_case", "generate",
