@@ -48,21 +48,11 @@ def handle_errors(func):
 def emit(as_json: bool, payload: dict, human: str) -> None:
     """Print ``payload`` as JSON or ``human`` as text."""
     if as_json:
-        click.echo(json.dumps(payload, indent=2, default=_json_default))
+        from ._atomic import to_jsonable
+
+        click.echo(json.dumps(to_jsonable(payload), indent=2))
     else:
         click.echo(human)
-
-
-def _json_default(obj):
-    import numpy as np
-
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    if isinstance(obj, Path):
-        return str(obj)
-    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
 def check_out_dir(out) -> Path:

@@ -516,23 +516,17 @@ def save_model(model: RegimeModel, path) -> Path:
 
     import skops.io as sio
 
-    from .._atomic import write_group
+    from .._atomic import to_jsonable, write_group
 
     path = Path(path)
     state = {"classifier": model.classifier, "feature_names": list(model.feature_names),
              "param_ranges": {k: [float(a), float(b)] for k, (a, b) in
                               model.param_ranges.items()},
-             "metadata": json.dumps(model.metadata, default=_json_default),
+             "metadata": json.dumps(to_jsonable(model.metadata)),
              "rule_inputs": bool(model.rule_inputs)}
     write_group([(path, lambda tmp: tmp.write_bytes(
         sio.dumps(state, compression=zipfile.ZIP_DEFLATED, compresslevel=9)))])
     return path
-
-
-def _json_default(obj):
-    if isinstance(obj, np.generic):
-        return obj.item()
-    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
 
 
 def load_model(path) -> RegimeModel:
