@@ -174,7 +174,7 @@ def test_pure_sine_or_constant_acceleration_has_no_impacts(n, seed, const):
     t, x, a, xe = _forced(n, seed)
     for acc in (a, np.full(n, const)):
         out = _run(_recording(x, acc, xe))
-        s = _check_valid(out, out._recording)
+        s = _check_valid(out, out.recording)
         assert s["impacts"]["n"] == 0
         assert s["restitution"]["right"]["rms"] is None
         assert s["restitution"]["left"]["rms"] is None
@@ -198,7 +198,7 @@ def test_one_strong_pulse_is_one_impact_without_restitution(seed, frac, dv, sign
     t, x, a, xe = _forced(n, seed)
     t0 = frac * t[-1]
     out = _run(_recording(x, a + _pulse(t, t0, sign * dv), xe))
-    s = _check_valid(out, out._recording)
+    s = _check_valid(out, out.recording)
     assert s["impacts"]["n"] == 1
     assert abs(s["impacts"]["t"][0] - t0) < 20e-6
     assert s["impacts"]["side"][0] == ("right" if sign > 0 else "left")
@@ -232,7 +232,7 @@ def test_chatter_burst_is_resolved_on_one_wall(seed, k, gap, r, dv):
     for ti, di in zip(times, dvs):
         a = a + _pulse(t, ti, di)
     out = _run(_recording(x, a, xe))
-    s = _check_valid(out, out._recording)
+    s = _check_valid(out, out.recording)
     found = np.asarray(s["impacts"]["t"])
     # must be seen: matched-filter SNR twice the detector's floor next to stronger pulses
     # (threshold + mismatch x their SNR within the kernel span, see impacts module docs)
@@ -289,7 +289,7 @@ def test_clipped_acceleration_is_flagged(seed, level):
         a = a + _pulse(t, ti, (-1) ** j * 2e-2)
     rail = level * np.abs(a).max()
     out = _run(_recording(x, np.clip(a, -rail, rail), xe))
-    s = _check_valid(out, out._recording)
+    s = _check_valid(out, out.recording)
     assert out.detection.n_clipped > 0
     assert any("clipped" in w for w in s["warnings"])
     if rail > 60.0:                    # the smooth response (|a| <= 12.6) stays unclipped
@@ -315,7 +315,7 @@ def test_detection_is_exactly_equivariant_to_the_acceleration_scale(seed, k):
     if np.abs(a).max() * 2.0 ** k > MAX_ACCELERATION:
         assert isinstance(out, InputError) and "column 'a'" in str(out)
         return
-    _check_valid(out, out._recording)
+    _check_valid(out, out.recording)
     assert np.array_equal(out.detection.t, ref.detection.t)
     assert np.array_equal(out.detection.side, ref.detection.side)
     assert np.allclose(out.detection.dv, ref.detection.dv * 2.0 ** k, rtol=1e-9, atol=0)

@@ -242,7 +242,7 @@ def _tilted(recon: Reconstruction, det: ImpactDetection, rec, mu: float,
 
     if recon.n_flights == 0:
         return recon
-    view = SimpleNamespace(_recording=rec, reconstruction=recon, detection=det,
+    view = SimpleNamespace(recording=rec, reconstruction=recon, detection=det,
                            name=rec.name)
     sol = reconstruct_with_law(view, (mu, theta_deg))
     fc = {k: np.array(v, copy=True) for k, v in recon.flight_columns.items()}

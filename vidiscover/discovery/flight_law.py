@@ -267,7 +267,7 @@ class _Record:
     """Impacts, flights and LO motion of one analysed recording."""
 
     def __init__(self, analysis) -> None:
-        rec = getattr(analysis, "_recording", None)
+        rec = getattr(analysis, "recording", None)
         if rec is None:
             raise InputError("discover_flight_law needs AnalysisResult objects from "
                              "analyze(rec) (their recording is missing)")

@@ -151,7 +151,7 @@ class DiscoveryResult:
 
 # --------------------------------------------------------------------- residuals
 def _residuals(analysis: AnalysisResult, flight) -> pd.DataFrame:
-    rec = getattr(analysis, "_recording", None)
+    rec = analysis.recording
     m1, m2 = (rec.meta.m1, rec.meta.m2) if rec is not None else (4.168, 0.032)
     fl = analysis.reconstruction.flights
     dv = np.asarray(analysis.detection.dv, dtype=float)
@@ -319,7 +319,7 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_bootstrap: int = 2
         mu_id = float(flight_result.mu)
         theta_id = float(flight_result.theta_deg)
         theta_id = theta_id if math.isfinite(theta_id) and abs(theta_id) >= 0.05 else 0.0
-        recs = [getattr(a, "_recording", None) for a in analyses]
+        recs = [a.recording for a in analyses]
         if (math.isfinite(mu_id) and all(r is not None for r in recs)
                 and ((mu_id > 0 and abs(mu_id - mu) > 0.005) or theta_id)):
             mu_impacts = min(max(mu_id, 0.0), 2.0)

@@ -389,7 +389,7 @@ class RegimeModel:
             feats.update(compute_features(feature_context(analysis), missing))
         proba = self.predict_proba([feats]).iloc[0]
         label = str(proba.idxmax())
-        rec = getattr(analysis, "_recording", None)
+        rec = analysis.recording
         warn = self.domain_warnings(feats, rec.meta if rec is not None else None,
                                     analysis.detection.duration)
         return Classification(file=file or analysis.name, label=label,

@@ -113,10 +113,6 @@ def render_all(result, truth: dict | None = None, names=None) -> dict:
 
 
 # ------------------------------------------------------------------------------ helpers
-def recording_of(result):
-    """The recording an :class:`AnalysisResult` was computed from (or None)."""
-    rec = getattr(result, "recording", None)
-    return rec if rec is not None else getattr(result, "_recording", None)
 
 
 def _span(result, window: float | None) -> tuple[float, float]:
@@ -184,7 +180,7 @@ def fig_acceleration(result, truth: dict | None = None, *, window: float | None 
     """
     fig, axes = figure(1, 1, figsize=(9, 3.0))
     ax = axes[0, 0]
-    rec = recording_of(result)
+    rec = result.recording
     t0, t1 = _span(result, window)
     if rec is not None:
         s = _sel(rec.t, t0, t1)
@@ -288,7 +284,7 @@ def fig_displacement(result, truth: dict | None = None, *,
     """
     fig, axes = figure(1, 1, figsize=(9, 3.0))
     ax = axes[0, 0]
-    rec = recording_of(result)
+    rec = result.recording
     t0, t1 = _span(result, window)
     tx = _truth_motion(truth, "x", t0, t1)
     if tx is not None:

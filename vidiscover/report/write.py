@@ -30,14 +30,9 @@ FLIGHTS_FILE = "flights.csv"
 FIGURE_DIR = "figures"
 
 
-def _recording(result):
-    rec = getattr(result, "recording", None)
-    return rec if rec is not None else getattr(result, "_recording", None)
-
-
 def _mu_rows(result) -> list[dict] | None:
     """Rows of the friction-sensitivity table, or None without the recording."""
-    if _recording(result) is None:
+    if result.recording is None:
         return None
     return to_jsonable(result.mu_table().to_dict(orient="records"))
 
@@ -80,7 +75,7 @@ def analysis_summary(result, truth: dict | None = None, *, mu_table: bool = True
 
 
 def _meta_rows(result) -> dict:
-    rec = _recording(result)
+    rec = result.recording
     if rec is None:
         return {}
     m = rec.meta
