@@ -62,6 +62,12 @@ class SimOptions:
         Event-search grid points per shortest period of the system.
     max_events : int or None
         Bound on the number of events (default: 400 per forcing period).
+    friction_speed : float
+        Compliant engine only: the regularisation speed v_s of dry friction,
+        ``mu m2 g tanh(z'/v_s)`` (m/s, default 1 mm/s).
+    contact_rtol : float
+        Compliant engine only: ``solve_ivp`` relative tolerance of the contacts and
+        flights it integrates numerically (Hunt-Crossley walls, friction).
     """
 
     settle: float = 20.0
@@ -71,6 +77,8 @@ class SimOptions:
     stick_speed: float = 1e-4
     grid_per_period: int = 64
     max_events: int | None = None
+    friction_speed: float = 1e-3
+    contact_rtol: float = 1e-9
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.settle) and self.settle >= 0):
@@ -84,6 +92,10 @@ class SimOptions:
             raise InputError(f"grid_per_period must be >= 8, was {self.grid_per_period!r}")
         if not self.stick_speed >= 0:
             raise InputError(f"stick_speed must be >= 0 m/s, was {self.stick_speed!r}")
+        if not (math.isfinite(self.friction_speed) and self.friction_speed > 0):
+            raise InputError(f"friction_speed must be > 0 m/s, was {self.friction_speed!r}")
+        if not (0 < self.contact_rtol < 1):
+            raise InputError(f"contact_rtol must be in (0, 1), was {self.contact_rtol!r}")
 
 
 class _Model:
@@ -134,8 +146,12 @@ class _Model:
 
 
 def simulate(params: SystemParams, effects: Effects | None = None,
-             options: SimOptions | None = None, **option_kw) -> SimulationResult:
+             options: SimOptions | None = None, contact=None, **option_kw
+             ) -> SimulationResult:
     """Simulate the LO + ball system exactly (event-driven, closed-form flows).
+
+    With ``contact`` the walls are compliant instead (penalty forces, contacts of
+    finite duration; :mod:`vidiscover.simulation.compliant`).
 
     Parameters
     ----------
@@ -145,11 +161,16 @@ def simulate(params: SystemParams, effects: Effects | None = None,
         Switched-on effects (default: none, the paper's nominal model).
     options : SimOptions, optional
         Numerical and initial-condition options; keyword arguments override fields.
+    contact : ContactModel, str or list of str, optional
+        Compliant walls, e.g. ``"hunt-crossley:k=1e9,alpha=0.3"`` (see
+        :mod:`vidiscover.simulation.contact`); None (default): rigid walls with
+        Newton's restitution law (this exact engine).
 
     Returns
     -------
     SimulationResult
-        Piecewise closed-form trajectory, impacts, sticking phases, status.
+        Piecewise closed-form trajectory, impacts, sticking phases, status
+        (a :class:`~vidiscover.simulation.compliant.CompliantResult` with ``contact``).
 
     Examples
     --------
@@ -158,6 +179,9 @@ def simulate(params: SystemParams, effects: Effects | None = None,
     >>> res.status, res.impacts.n > 0
     (0, True)
     """
+    if contact is not None:
+        from .compliant import simulate_compliant
+        return simulate_compliant(params, effects, options, contact, **option_kw)
     effects = effects if effects is not None else Effects()
     options = options if options is not None else SimOptions()
     if option_kw:

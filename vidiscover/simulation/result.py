@@ -41,6 +41,11 @@ class ImpactTable:
         LO displacement at the impact (m).
     stuck : ndarray of bool
         The rebound was slower than ``stick_speed``: the ball stuck to the wall.
+    t_out : ndarray
+        End of the contact (s): equal to ``t`` for instantaneous impacts; for the
+        compliant engine ``t`` is the start of the contact episode (``t_in``) and
+        ``t_out`` its end, and ``u_minus``/``u_plus`` are the relative velocities
+        at entry/exit (``v_in``/``v_out``).
     """
 
     t: np.ndarray
@@ -54,11 +59,14 @@ class ImpactTable:
     w_plus: np.ndarray
     x: np.ndarray
     stuck: np.ndarray
+    t_out: np.ndarray
 
     @classmethod
     def from_rows(cls, rows: list[tuple]) -> ImpactTable:
-        """Build from the loop's tuples."""
+        """Build from the loop's tuples (without ``t_out``, instantaneous: ``t_out = t``)."""
         names = [f for f in cls.__dataclass_fields__]
+        if rows and len(rows[0]) == len(names) - 1:
+            rows = [(*row, row[0]) for row in rows]
         if not rows:
             cols = {n: np.zeros(0) for n in names}
             cols["side"] = np.zeros(0, dtype=np.int8)
@@ -85,11 +93,18 @@ class ImpactTable:
         return ImpactTable(**{k: getattr(self, k)[mask] for k in self.__dataclass_fields__})
 
     def to_records(self, t_offset: float = 0.0) -> list[dict]:
-        """JSON-ready list of dicts with sides as strings and times shifted by ``-t_offset``."""
+        """JSON-ready list of dicts with sides as strings and times shifted by ``-t_offset``.
+
+        Besides the fields, ``t_in`` (= ``t``), ``t_out``, ``v_in`` (= ``u_minus``) and
+        ``v_out`` (= ``u_plus``) describe the contact episode (DESIGN.md section 9).
+        """
         out = []
         for i in range(self.n):
             out.append({
-                "t": float(self.t[i] - t_offset), "side": SIDE_NAMES[int(self.side[i])],
+                "t": float(self.t[i] - t_offset), "t_in": float(self.t[i] - t_offset),
+                "t_out": float(self.t_out[i] - t_offset),
+                "v_in": float(self.u_minus[i]), "v_out": float(self.u_plus[i]),
+                "side": SIDE_NAMES[int(self.side[i])],
                 "u_minus": float(self.u_minus[i]), "u_plus": float(self.u_plus[i]),
                 "r": float(self.r[i]), "v_minus": float(self.v_minus[i]),
                 "v_plus": float(self.v_plus[i]), "w_minus": float(self.w_minus[i]),
@@ -119,6 +134,8 @@ class SimulationResult:
         0: reached the end; 1: stopped by the event bound.
     message : str
     n_events : int
+    contact : ContactModel or None
+        The compliant walls, or None for the exact engine (instantaneous impacts).
     """
 
     params: SystemParams
@@ -133,6 +150,17 @@ class SimulationResult:
     n_events: int
     _segments: dict = field(repr=False)
     _model: object = field(repr=False)
+    contact: object = None
+
+    @property
+    def impulsive(self) -> bool:
+        """True when impacts are instantaneous (the exact engine).
+
+        Then the LO velocity jumps at impacts and ``evaluate()["xdd"]`` excludes the
+        impulses; with compliant walls (False) ``xdd`` is the full, continuous LO
+        acceleration including the contact forces.
+        """
+        return self.contact is None
 
     @classmethod
     def from_loop(cls, model: _Model, segs, impacts, sticks, status, message, n_events

@@ -1,0 +1,644 @@
+"""Compliant-contact simulation: walls as clipped penalty forces (DESIGN.md section 9).
+
+Model (state x, x', z = y - x, z'; ``delta = s z - b`` the penetration beyond the
+wall ``s`` = +1 right / -1 left, ``F >= 0`` the clipped law of that wall,
+:mod:`.contact`)::
+
+    m1 x'' = c1 (xe' - x') + k1 (xe - x) + s F + mu m2 g tanh(z' / v_s)
+    m2 y'' = -s F - mu m2 g tanh(z' / v_s) + m2 g sin(theta)
+
+A contact episode starts when ``|z|`` crosses ``b`` outward and ends when the force
+returns to zero for the last time before the ball is back inside the clearance
+(if the force comes back while ``delta > 0``, the ball never left the wall: same
+episode). Each episode is one row of the ground truth: ``t`` = ``t_in``, ``t_out``,
+``u_minus`` = ``v_in`` (z' at entry), ``u_plus`` = ``v_out`` (z' at exit),
+``r = -v_out / v_in``.
+
+Speed design
+------------
+* Without friction (``mu = 0``) flights are closed form: the exact engine's flight
+  (:class:`~.engine._Loop`, its event grid and bracketed Newton search for
+  ``|z| = b``) is reused unchanged.
+* Kelvin-Voigt contacts are linear: closed form by the eigen-decomposition of the
+  4x4 system matrix (once per wall) plus the particular response to the harmonic
+  base forcing and the constant forces; the exit (force = 0) is found on a grid of
+  1/32 of the contact half-period, refined by bracketed Newton.
+* Hunt-Crossley contacts, and with friction (``mu > 0``) everything, are
+  integrated with ``solve_ivp`` (DOP853, terminal events, bounded step, dense
+  output kept for :meth:`CompliantResult.evaluate`). Friction is regularised
+  (``tanh(z'/v_s)``, ``v_s`` = ``SimOptions.friction_speed``, 1 mm/s default): near
+  ``z' = 0`` it is a stiff viscous law (rate ``mu g / v_s``, 1.5e3 1/s at mu = 0.15),
+  so numerical flights take steps of about a millisecond; this path costs seconds
+  per 25 s, not milliseconds.
+
+The number of phases is bounded (``max_events``), so a ball resting on a wall or
+chattering cannot hang the engine.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+from scipy.integrate import solve_ivp
+
+from ..effects import Effects
+from ..errors import InputError
+from ..params import G_ACCEL, SystemParams
+from .contact import ContactModel
+from .engine import SimOptions, _Loop, _Model
+from .result import ImpactTable, SimulationResult
+from .roots import bracketed_newton
+
+__all__ = ["simulate_compliant", "simulate_reference", "CompliantResult", "as_contact_model"]
+
+RIGHT, LEFT = 1, -1
+FLIGHT, KV, NUM = 0, 1, 2
+#: Effects that fix the restitution or the impact duration: the contact law does.
+_CONFLICTS = ("asymmetric_restitution", "velocity_dependent_restitution",
+              "restitution_drift", "contact_duration")
+
+
+def as_contact_model(contact) -> ContactModel:
+    """A :class:`ContactModel` from a model, a spec string or a list of specs."""
+    if isinstance(contact, ContactModel):
+        return contact
+    if isinstance(contact, (str, list, tuple)):
+        return ContactModel.parse(contact)
+    raise InputError(f"contact must be a ContactModel or --contact spec string(s), "
+                     f"was {type(contact).__name__}")
+
+
+def _check_effects(fx: Effects) -> None:
+    bad = [n for n in _CONFLICTS if n in fx]
+    if bad:
+        raise InputError(f"effect(s) {', '.join(bad)} cannot be used with --contact: the "
+                         "walls' restitution and contact duration come from the contact "
+                         "law; drop the effect or the --contact option")
+
+
+class _Wall:
+    """One wall's law resolved for the pair's masses."""
+
+    def __init__(self, side: int, law, m_eff: float) -> None:
+        self.side, self.law = side, law
+        self.kv = law.kind == "kelvin-voigt"
+        self.k = law.k
+        self.c = law.damping(m_eff) if self.kv else 0.0
+        self.a15 = 0.0 if self.kv else 1.5 * law.alpha
+        self.n = law.n
+
+    def gate(self, delta: float, ddelta: float) -> float:
+        """Sign of the (unclipped) force: positive while the wall pushes."""
+        if self.kv:
+            return self.k * delta + self.c * ddelta
+        return 1.0 + self.a15 * ddelta
+
+    def force(self, delta, ddelta):
+        """Clipped force magnitude (0 where ``delta <= 0``), arrays or floats."""
+        d = np.maximum(delta, 0.0)
+        if self.kv:
+            f = self.k * d + self.c * ddelta
+        else:
+            f = self.k * d ** self.n * (1.0 + self.a15 * ddelta)
+        return np.where(d > 0.0, np.maximum(f, 0.0), 0.0)
+
+    def duration(self, speed: float, m_eff: float) -> float:
+        """Rough contact duration (s) at an impact speed, to bound integration steps."""
+        if self.kv:
+            return math.pi / math.sqrt(self.k / m_eff)
+        n = self.n
+        # time scale of m d'' = -k d^n with d' = v at d = 0
+        dmax = ((n + 1) * m_eff * max(speed, 1e-3) ** 2 / (2 * self.k)) ** (1 / (n + 1))
+        return 3.0 * dmax / max(speed, 1e-3)
+
+
+class _KVSystem:
+    """Closed form of a Kelvin-Voigt contact on one wall: X' = A X + f(t), X = (x, v, z, u)."""
+
+    def __init__(self, cm: _CModel, wall: _Wall) -> None:
+        p, s = cm.p, wall.side
+        m1, m2, k, c = p.m1, p.m2, wall.k, wall.c
+        A = np.array([[0.0, 1.0, 0.0, 0.0],
+                      [-p.k1 / m1, -p.c1 / m1, k / m1, c / m1],
+                      [0.0, 0.0, 0.0, 1.0],
+                      [p.k1 / m1, p.c1 / m1, -k / m1 - k / m2, -c / m1 - c / m2]])
+        f0 = np.array([0.0, -s * k * cm.b / m1, 0.0, s * k * cm.b * (1 / m1 + 1 / m2) + cm.gs])
+        self.side, self.k, self.c, self.b = s, k, c, cm.b
+        self.lam, self.V = np.linalg.eig(A)
+        self.Vinv = np.linalg.inv(self.V)
+        self.Xc = -np.linalg.solve(A, f0)
+        ev = np.array([0.0, 1.0 / m1, 0.0, -1.0 / m1])
+        self.w = cm.base.omegas
+        self.P = np.array([np.linalg.solve(1j * w * np.eye(4) - A, ev * (p.k1 + 1j * w * p.c1) * bj)
+                           for w, bj in zip(self.w, cm.base.complex_amplitudes, strict=True)])
+        fast = int(np.argmax(np.abs(self.lam.imag)))
+        self.wc = abs(self.lam[fast].imag)
+        self.sigma = -self.lam[fast].real
+        self.h = math.pi / self.wc / 32.0
+
+    def particular(self, t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Particular state and its derivative at times ``t`` (N,) -> (N, 4) each."""
+        e = np.exp(1j * np.outer(t, self.w))                  # (N, H)
+        Xp = self.Xc + (e @ self.P).imag
+        dXp = ((e * (1j * self.w)) @ self.P).imag
+        return Xp, dXp
+
+    def coeffs(self, t0: float, X0: np.ndarray) -> np.ndarray:
+        """Modal coefficients of the homogeneous part for state ``X0`` at ``t0``."""
+        return self.Vinv @ (X0 - self.particular(np.array([t0]))[0][0])
+
+    def state(self, t: np.ndarray, t0, c) -> tuple[np.ndarray, np.ndarray]:
+        """State (N, 4) and derivative at ``t``; ``t0`` (N,) or scalar, ``c`` (N, 4) or (4,)."""
+        Xp, dXp = self.particular(t)
+        E = np.atleast_2d(c) * np.exp(np.outer(t - t0, self.lam))   # (N, 4)
+        return Xp + (E @ self.V.T).real, dXp + ((E * self.lam) @ self.V.T).real
+
+    def gate(self, X: np.ndarray, dX: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Unclipped force k delta + c delta' and its time derivative."""
+        s = self.side
+        return (self.k * (s * X[:, 2] - self.b) + self.c * s * X[:, 3],
+                self.k * s * X[:, 3] + self.c * s * dX[:, 3])
+
+
+class _CModel:
+    """Everything the compliant loop needs, resolved once."""
+
+    def __init__(self, p: SystemParams, fx: Effects, contact: ContactModel,
+                 opt: SimOptions) -> None:
+        _check_effects(fx)
+        self.exact = _Model(p, fx, opt)          # flights, base, grid, validation
+        self.p, self.fx, self.opt, self.contact = p, fx, opt, contact
+        self.b, self.gs, self.base = self.exact.b, self.exact.gs, self.exact.base
+        self.free = self.exact.free
+        self.m_eff = p.m1 * p.m2 / (p.m1 + p.m2)
+        self.walls = {RIGHT: _Wall(RIGHT, contact.right, self.m_eff),
+                      LEFT: _Wall(LEFT, contact.left, self.m_eff)}
+        self.fric = fx.mu * p.m2 * G_ACCEL
+        self.vs = opt.friction_speed
+        self.kv = {s: _KVSystem(self, w) for s, w in self.walls.items() if w.kv}
+        self._terms = [(float(w), float(bj.real), float(bj.imag)) for w, bj in
+                       zip(self.base.omegas, self.base.complex_amplitudes, strict=True)]
+
+    # ---------------------------------------------------------------- right-hand side
+    def rhs(self, active: int):
+        """Scalar right-hand side with the contact of wall ``active`` (0: none) switched on.
+
+        In a contact phase the law is not clipped (the phase ends where it would
+        be): the flow stays smooth inside every integration step.
+        """
+        p, terms, gs, fric, vs = self.p, self._terms, self.gs, self.fric, self.vs
+        m1, m2, c1, k1 = p.m1, p.m2, p.c1, p.k1
+        wall = self.walls.get(active)
+        b = self.b
+        tanh, sin, cos = math.tanh, math.sin, math.cos
+
+        def f(t, X):
+            x, v, z, u = X
+            xe = vxe = 0.0
+            for w, br, bi in terms:
+                sn, cs = sin(w * t), cos(w * t)
+                xe += br * sn + bi * cs
+                vxe += w * (br * cs - bi * sn)
+            flo = c1 * (vxe - v) + k1 * (xe - x)
+            fb = 0.0
+            if fric:
+                fr = fric * tanh(u / vs)
+                flo += fr
+                fb -= fr
+            if wall is not None:
+                s = wall.side
+                d, dd = s * z - b, s * u
+                if wall.kv:
+                    F = wall.k * d + wall.c * dd
+                else:
+                    F = wall.k * max(d, 0.0) ** wall.n * (1.0 + wall.a15 * dd)
+                flo += s * F
+                fb -= s * F
+            a = flo / m1
+            return [v, a, u, fb / m2 + gs - a]
+        return f
+
+    def accel(self, t, x, v, z, u):
+        """Full LO acceleration (contact and friction reactions included), vectorised."""
+        p = self.p
+        xe = np.zeros_like(t)
+        vxe = np.zeros_like(t)
+        for w, br, bi in self._terms:
+            sn, cs = np.sin(w * t), np.cos(w * t)
+            xe += br * sn + bi * cs
+            vxe += w * (br * cs - bi * sn)
+        f = p.c1 * (vxe - v) + p.k1 * (xe - x)
+        for s, wall in self.walls.items():
+            f += s * wall.force(s * z - self.b, s * u)
+        if self.fric:
+            f += self.fric * np.tanh(u / self.vs)
+        return f / p.m1
+
+
+class _Event:
+    """A terminal solve_ivp event."""
+
+    terminal = True
+
+    def __init__(self, fun, direction: float) -> None:
+        self.fun, self.direction = fun, direction
+
+    def __call__(self, t, X):
+        return self.fun(t, X)
+
+
+class _CompliantLoop(_Loop):
+    """Event loop of the compliant engine (flights of the exact engine reused when mu = 0)."""
+
+    def __init__(self, cm: _CModel, numeric: bool, rtol: float, atol: float) -> None:
+        super().__init__(cm.exact)
+        self.cm = cm
+        self.numeric = numeric or cm.fric > 0.0
+        self.rtol = rtol
+        w0 = math.sqrt(cm.p.k1 / cm.p.m1)
+        self.atol = np.array([atol, atol * w0, atol, atol * w0])
+        self.kvsegs: list[tuple] = []            # (t0, t1, side, c0..c3)
+        self.numsegs: list = []                  # OdeSolution per numeric segment
+        self.index: list[tuple] = []             # (t0, t1, kind, i)
+
+    # ---------------------------------------------------------------- bookkeeping
+    def _seg(self, kind: int, t0: float, t1: float, i: int) -> None:
+        self.index.append((t0, t1, kind, i))
+
+    def _count(self, t: float) -> bool:
+        if self.n_events >= self.max_events:
+            self.status = 1
+            self.message = f"stopped after {self.n_events} events (max_events) at t = {t:.6g} s"
+            return False
+        self.n_events += 1
+        return True
+
+    # ---------------------------------------------------------------- loop
+    def run(self) -> CompliantResult:
+        cm, opt = self.cm, self.cm.opt
+        if opt.initial is None:
+            x, v, y, w = 0.0, 0.0, 0.0, float(opt.ball_speed)
+        else:
+            x, v, y, w = (float(s) for s in opt.initial)
+            if abs(y - x) > cm.b:
+                raise InputError(f"initial ball position is outside the clearance: "
+                                 f"|y - x| = {abs(y - x)!r} m > b = {cm.b!r} m")
+        self.status, self.message = 0, "reached the end of the record"
+        t, X = 0.0, np.array([x, v, y - x, w - v])
+        start_wall = 0
+        while t < self.t_end and self._count(t):
+            # ---- flight from inside the clearance
+            t, X, side = self._flight_phase(t, X, start_wall)
+            if side == 0:
+                break
+            entry = (t, X.copy())
+            # ---- contact episode: contact phases, and flights beyond the wall
+            while True:
+                if not self._count(t):
+                    side = 0
+                    break
+                t, X, inside = self._contact_phase(t, X, side)
+                if inside is None:       # end of the simulated span inside a contact
+                    side = 0
+                    break
+                t_out, X_out = t, X.copy()
+                if inside:
+                    break
+                if not self._count(t):
+                    side = 0
+                    break
+                t, X, back = self._beyond_phase(t, X, side)
+                if back is None:
+                    side = 0
+                    break
+                if back:                 # the ball is inside the clearance again
+                    break
+            if side == 0:
+                break
+            ti, Xi = entry
+            u_in, u_out = Xi[3], X_out[3]
+            self.impacts.append((ti, side, u_in, u_out, -u_out / u_in, Xi[1], X_out[1],
+                                 Xi[1] + u_in, X_out[1] + u_out, Xi[0], False, t_out))
+            X[2] = side * cm.b
+            start_wall = side
+        return CompliantResult.from_compliant(self)
+
+    # ---------------------------------------------------------------- flights
+    def _flight_phase(self, t, X, start_wall):
+        """Flight inside the clearance up to a wall (side) or the end (0)."""
+        if self.numeric:
+            return self._ivp_flight(t, X, start_wall, beyond=0)[:3]
+        x, v, z, u = X.tolist()
+        n0 = len(self.segs)
+        te, x, v, y, w, kind = self._flight(t, x, v, x + z, v + u, 1 if u > 0 else -1,
+                                            start_wall)
+        for i in range(n0, len(self.segs)):
+            self._seg(FLIGHT, self.segs[i][0], self.segs[i][1], i)
+        side = 0 if kind == "end" else kind
+        return te, np.array([x, v, y - x, w - v]), side
+
+    def _beyond_phase(self, t, X, side):
+        """Flight with the ball beyond wall ``side`` and no force.
+
+        Returns (t, X, back): back True when the ball is inside the clearance again,
+        False when the force comes back (same episode), None at the end of the span.
+        """
+        if self.numeric:
+            t, X, ev = self._ivp_flight(t, X, 0, beyond=side)
+            return t, X, (None if ev == 0 else ev == 1)
+        cm, wall = self.cm, self.cm.walls[side]
+        osc = cm.free
+        x, v, z, u = X.tolist()
+        C1, C2 = osc.coefficients(t, x, v, 0.0)
+        y0, w0 = x + z, v + u
+        _, zf, _, _, _ = self._flight_functions(osc, t, C1, C2, 0.0, y0, w0, cm.gs, cm.b)
+        b, s = cm.b, side
+
+        def g_delta(tt):
+            zz, zd, _ = zf(tt)
+            return s * zz - b, s * zd
+
+        def g_force(tt):
+            zz, zd, zdd = zf(tt)
+            if wall.kv:
+                return wall.k * (s * zz - b) + wall.c * s * zd, wall.k * s * zd + wall.c * s * zdd
+            return 1.0 + wall.a15 * s * zd, wall.a15 * s * zdd
+
+        d0, dd0 = g_delta(t)
+        # steps of 1/16 of the time to get back inside, growing, at most the flight grid
+        h = min(max(d0 / -dd0 / 16.0, 1e-12) if dd0 < 0 else 1e-6, self.m.h)
+        ta, fa, ga = t, d0, min(g_force(t)[0], 0.0)   # the force has just vanished
+        kind = None
+        while ta < self.t_end:
+            tb = min(ta + h, self.t_end)
+            fb, gb = g_delta(tb)[0], g_force(tb)[0]
+            found = []
+            if fb <= 0.0:
+                found.append((bracketed_newton(g_delta, ta, tb, fa, fb), True))
+            if gb > 0.0 >= ga:
+                tf = bracketed_newton(g_force, ta, tb, ga, gb)
+                if g_delta(tf)[0] > 0.0:
+                    found.append((tf, False))
+            if found:
+                te, kind = min(found)
+                break
+            ta, fa, ga = tb, fb, gb
+            h = min(1.5 * h, self.m.h)
+        te = ta if kind is None else te
+        xx, vv, _ = osc.state(te, t, C1, C2, 0.0)
+        tau = te - t
+        yy, ww = y0 + w0 * tau + 0.5 * cm.gs * tau * tau, w0 + cm.gs * tau
+        self.segs.append((t, te, 0, C1, C2, 0.0, y0, w0, cm.gs, 0.0))
+        self._seg(FLIGHT, t, te, len(self.segs) - 1)
+        Xe = np.array([xx, vv, yy - xx, ww - vv])
+        if kind is True:
+            Xe[2] = s * b
+        return te, Xe, kind
+
+    # ---------------------------------------------------------------- contacts
+    def _contact_phase(self, t, X, side):
+        """The wall pushes until its force is zero.
+
+        Returns (t, X, inside): inside True when the penetration is zero there, False
+        when the ball is still beyond the wall, None at the end of the span.
+        """
+        if side in self.cm.kv and not self.numeric:
+            return self._kv_contact(t, X, side)
+        return self._ivp_contact(t, X, side)
+
+    def _kv_contact(self, t0, X0, side):
+        sysm = self.cm.kv[side]
+        c = sysm.coeffs(t0, X0)
+        n = 64
+        h = sysm.h
+        ta = t0
+        t_end = self.t_end
+        grid = np.arange(n + 1, dtype=float)
+        te = None
+        while ta < t_end:
+            tt = ta + h * grid
+            X, dX = sysm.state(tt, t0, c)
+            g, _ = sysm.gate(X, dX)
+            if ta == t0:
+                g[0] = max(g[0], 0.0)
+            hit = np.flatnonzero(g[1:] <= 0.0)
+            if hit.size:
+                k = int(hit[0])
+
+                def fg(s):
+                    Xs, dXs = sysm.state(np.array([s]), t0, c)
+                    gg, dg = sysm.gate(Xs, dXs)
+                    return float(gg[0]), float(dg[0])
+                te = bracketed_newton(fg, tt[k], tt[k + 1], float(g[k]), float(g[k + 1]))
+                break
+            ta = tt[-1]
+            if ta - t0 > 30.0 / sysm.sigma:      # the contact mode has died out
+                h = max(h, self.m.h)
+        inside = None
+        if te is None or te >= t_end:
+            te = t_end
+        Xe = sysm.state(np.array([te]), t0, c)[0][0]
+        if te < t_end:
+            inside = side * Xe[2] - self.cm.b <= 0.0
+        self.kvsegs.append((t0, te, side, *c))
+        self._seg(KV, t0, te, len(self.kvsegs) - 1)
+        if inside:
+            Xe[2] = side * self.cm.b
+        return te, Xe, inside
+
+    def _ivp(self, t0, X0, active, events, max_step):
+        sol = solve_ivp(self.cm.rhs(active), (t0, self.t_end), X0, method="DOP853",
+                        rtol=self.rtol, atol=self.atol, events=events, max_step=max_step,
+                        first_step=max_step / 4, dense_output=True)
+        hit = [k for k, te in enumerate(sol.t_events) if te.size]
+        self.numsegs.append(sol.sol)
+        if not hit:
+            te, Xe, k = float(sol.t[-1]), sol.y[:, -1].copy(), -1
+        else:
+            k = min(hit, key=lambda j: sol.t_events[j][0])
+            te, Xe = float(sol.t_events[k][0]), sol.y_events[k][0].copy()
+        self._seg(NUM, t0, te, len(self.numsegs) - 1)
+        return te, Xe, k
+
+    def _ivp_contact(self, t0, X0, side):
+        cm, wall, b = self.cm, self.cm.walls[side], self.cm.b
+        s = side
+
+        def ev_gate(t, X):
+            return wall.gate(s * X[2] - b, s * X[3])
+
+        def ev_delta(t, X):
+            return s * X[2] - b
+        dur = wall.duration(abs(X0[3]), cm.m_eff)
+        te, Xe, k = self._ivp(t0, X0, side, [_Event(ev_gate, -1.0), _Event(ev_delta, -1.0)],
+                              max_step=min(dur / 16.0, self.m.h))
+        if k < 0:
+            return te, Xe, None
+        inside = k == 1 or s * Xe[2] - b <= 0.0
+        if inside:
+            Xe[2] = s * b
+        return te, Xe, inside
+
+    def _ivp_flight(self, t0, X0, start_wall, beyond):
+        """Numerical flight (friction, reference path).
+
+        Returns (t, X, side hit or 0 at the end) inside the clearance, or with
+        ``beyond`` (ball beyond that wall): (t, X, 1 back inside / 2 force back / 0 end).
+        """
+        cm, b = self.cm, self.cm.b
+        if beyond:
+            s, wall = beyond, cm.walls[beyond]
+
+            def ev_in(t, X):
+                return s * X[2] - b
+
+            def ev_force(t, X):
+                d = s * X[2] - b
+                return wall.gate(d, s * X[3]) if d > 0 else -1.0
+            te, Xe, k = self._ivp(t0, X0, 0, [_Event(ev_in, -1.0), _Event(ev_force, 1.0)],
+                                  max_step=self.m.h)
+            if k == 0:
+                Xe[2] = s * b
+            return te, Xe, k + 1
+        events = [_Event(lambda t, X: X[2] - b, 1.0), _Event(lambda t, X: X[2] + b, -1.0)]
+        te, Xe, k = self._ivp(t0, X0, 0, events, max_step=self.m.h)
+        if k < 0:
+            return te, Xe, 0
+        side = RIGHT if k == 0 else LEFT
+        Xe[2] = side * b
+        return te, Xe, side
+
+
+@dataclasses.dataclass(frozen=True)
+class CompliantResult(SimulationResult):
+    """Result of the compliant engine: a :class:`SimulationResult` with contacts.
+
+    Contacts last a finite time; ``impulsive`` is False: ``evaluate()["xdd"]`` is the
+    full, continuous LO acceleration including the contact forces. ``sticking`` is
+    empty (a ball resting on a wall is one long contact episode).
+    """
+
+    @classmethod
+    def from_compliant(cls, loop: _CompliantLoop) -> CompliantResult:
+        """Assemble from the compliant loop."""
+        cm = loop.cm
+        idx = np.array(loop.index, dtype=float).reshape(-1, 4)
+        fl = np.array(loop.segs, dtype=float).reshape(-1, 10)
+        kv = np.array(loop.kvsegs, dtype=complex).reshape(-1, 7)
+        seg = {"t0": idx[:, 0], "t1": idx[:, 1], "kind": idx[:, 2].astype(int),
+               "i": idx[:, 3].astype(int), "flight": fl, "kv_t0": kv[:, 0].real,
+               "kv_side": kv[:, 2].real.astype(int), "kv_c": kv[:, 3:], "num": loop.numsegs}
+        return cls(cm.p, cm.fx, cm.b, cm.opt.settle, cm.opt.duration,
+                   ImpactTable.from_rows(loop.impacts), [], loop.status, loop.message,
+                   loop.n_events, seg, cm, cm.contact)
+
+    @property
+    def t_end(self) -> float:
+        """End of the simulated span (s)."""
+        return float(self._segments["t1"][-1]) if self._segments["t1"].size else 0.0
+
+    def evaluate(self, t) -> dict[str, np.ndarray]:
+        """State at times ``t`` (simulation clock), accurate inside contacts too.
+
+        Returns
+        -------
+        dict
+            ``x``, ``xd``, ``xdd`` (LO; ``xdd`` includes the contact forces and the
+            friction reaction), ``y``, ``yd`` (ball), ``z`` = y - x, ``xe`` (base).
+        """
+        t = np.atleast_1d(np.asarray(t, dtype=float))
+        seg, cm = self._segments, self._model
+        k = np.clip(np.searchsorted(seg["t0"], t, side="right") - 1, 0, seg["t0"].size - 1)
+        kind, sub = seg["kind"][k], seg["i"][k]
+        X = np.empty((t.size, 4))
+        sel = kind == FLIGHT
+        if sel.any():
+            f = seg["flight"][sub[sel]]
+            ts = t[sel]
+            x, v, _ = cm.free.state_array(ts, f[:, 0], f[:, 3], f[:, 4], f[:, 5])
+            tau = ts - f[:, 0]
+            y = f[:, 6] + f[:, 7] * tau + 0.5 * f[:, 8] * tau ** 2
+            X[sel] = np.column_stack([x, v, y - x, f[:, 7] + f[:, 8] * tau - v])
+        kv_side = np.zeros(t.size, dtype=int)
+        is_kv = kind == KV
+        kv_side[is_kv] = seg["kv_side"][sub[is_kv]]
+        for side, sysm in cm.kv.items():
+            sel = kv_side == side
+            if sel.any():
+                j = sub[sel]
+                X[sel] = sysm.state(t[sel], seg["kv_t0"][j], seg["kv_c"][j])[0]
+        sel = kind == NUM
+        if sel.any():
+            pos = np.flatnonzero(sel)
+            j = sub[pos]
+            order = np.argsort(j, kind="stable")
+            pos, j = pos[order], j[order]
+            cuts = np.flatnonzero(np.diff(j)) + 1
+            for p, jj in zip(np.split(pos, cuts), j[np.r_[0, cuts]], strict=True):
+                X[p] = seg["num"][int(jj)](t[p]).T
+        x, v, z, u = X.T
+        return {"x": x, "xd": v, "xdd": cm.accel(t, x, v, z, u), "y": x + z, "yd": v + u,
+                "z": z, "xe": cm.base.displacement(t)}
+
+
+def _prepare(params, effects, contact, options, option_kw) -> _CModel:
+    effects = effects if effects is not None else Effects()
+    options = options if options is not None else SimOptions()
+    if option_kw:
+        known = {f.name for f in dataclasses.fields(SimOptions)}
+        unknown = sorted(set(option_kw) - known)
+        if unknown:
+            raise InputError(f"unknown simulation option(s) {', '.join(unknown)}; "
+                             f"known: {', '.join(sorted(known))}")
+        options = dataclasses.replace(options, **option_kw)
+    return _CModel(params, effects, as_contact_model(contact), options)
+
+
+def simulate_compliant(params: SystemParams, effects: Effects | None = None,
+                       options: SimOptions | None = None, contact=None,
+                       **option_kw) -> CompliantResult:
+    """Simulate with compliant walls (use :func:`vidiscover.simulate` with ``contact=``).
+
+    Parameters
+    ----------
+    params, effects, options
+        As :func:`vidiscover.simulation.simulate`; effects that set the restitution
+        or the impact duration are refused (the contact law sets them).
+    contact : ContactModel, str or list of str
+        The walls (see :mod:`vidiscover.simulation.contact`).
+
+    Returns
+    -------
+    CompliantResult
+
+    Examples
+    --------
+    >>> from vidiscover import preset
+    >>> res = simulate_compliant(preset("paper", b=0.009), contact="kv:k=3e7,r=0.7",
+    ...                          settle=0.0, duration=1.0)
+    >>> res.status, res.impulsive, bool((res.impacts.t_out > res.impacts.t).all())
+    (0, False, True)
+    """
+    cm = _prepare(params, effects, contact, options, option_kw)
+    return _CompliantLoop(cm, numeric=False, rtol=cm.opt.contact_rtol, atol=1e-12).run()
+
+
+def simulate_reference(params: SystemParams, effects: Effects | None = None, contact=None,
+                       options: SimOptions | None = None, *, rtol: float = 1e-10,
+                       atol: float = 1e-12, **option_kw) -> CompliantResult:
+    """Slow fully numerical compliant simulation (the test and benchmark reference).
+
+    Flights and contacts alike are integrated by ``solve_ivp`` (DOP853, ``rtol``,
+    ``atol`` in metres, scaled by the LO angular frequency for velocities), with
+    terminal events at wall entry (``|z| = b``), contact exit (force = 0) and, beyond
+    a wall, return inside or return of the force; the step is bounded by 1/64 of the
+    shortest period of the system (1/16 of a contact's duration in contacts).
+
+    Returns
+    -------
+    CompliantResult
+    """
+    cm = _prepare(params, effects, contact, options, option_kw)
+    return _CompliantLoop(cm, numeric=True, rtol=rtol, atol=atol).run()
