@@ -54,8 +54,9 @@ def test_one_recording_json_files_and_truth(runner, recs, tmp_path):
     assert doc["restitution"]["right"]["n"] > 5 and doc["restitution"]["left"]["n"] > 5
     # the files
     assert doc["out"] == str(out)
-    assert sorted(p.name for p in out.iterdir()) == ["figures", "flights.csv", "impacts.csv",
-                                                      "report.html", "summary.json"]
+    assert sorted(p.name for p in out.iterdir()) == [".vidiscover", "figures", "flights.csv",
+                                                      "impacts.csv", "report.html",
+                                                      "summary.json"]
     summary = json.loads((out / "summary.json").read_text())
     assert summary == {k: v for k, v in doc.items() if k not in ("out", "files")}
     assert len(pd.read_csv(out / "impacts.csv")) == summary["impacts"]["n"]
@@ -84,7 +85,7 @@ def test_several_recordings_subdirs_index_and_json_list(runner, recs, tmp_path):
                                    "--out", str(out), "--json", "--no-figures"]))
     docs = json.loads(res.stdout)
     assert isinstance(docs, list) and [d["recording"] for d in docs] == ["b9", "b15"]
-    assert sorted(p.name for p in out.iterdir()) == ["b15", "b9", "index.html"]
+    assert sorted(p.name for p in out.iterdir()) == [".vidiscover", "b15", "b9", "index.html"]
     for d in docs:
         sub = out / d["recording"]
         assert d["out"] == str(sub)
@@ -102,7 +103,7 @@ def test_same_stem_twice_gets_two_subdirs(runner, recs, tmp_path):
     out = tmp_path / "dup"
     _ok(runner.invoke(main, ["analyze", str(recs / "b9.csv"), str(other / "b9.csv"),
                              "--out", str(out), "--no-figures", "--json"]))
-    assert sorted(p.name for p in out.iterdir()) == ["b9", "b9-2", "index.html"]
+    assert sorted(p.name for p in out.iterdir()) == [".vidiscover", "b9", "b9-2", "index.html"]
     # the copy has no truth file: its summary has no truth
     assert "truth" in json.loads((out / "b9" / "summary.json").read_text())
     assert "truth" not in json.loads((out / "b9-2" / "summary.json").read_text())

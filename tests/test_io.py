@@ -17,6 +17,7 @@ from vidiscover import io as vio
 from vidiscover.errors import InputError
 from vidiscover.io import (
     atomic_directory,
+    check_output_dir,
     read_metadata,
     read_recording,
     read_truth,
@@ -569,7 +570,7 @@ def test_write_json_failure_leaves_old_file(tmp_path):
     assert [p.name for p in tmp_path.iterdir()] == ["summary.json"]
 
 
-def test_atomic_directory_success_creates_and_merges(tmp_path):
+def test_atomic_directory_creates_then_replaces_the_whole_folder(tmp_path):
     out = tmp_path / "a" / "out"
     with atomic_directory(out) as tmp:
         assert tmp.parent == out.parent and tmp != out
@@ -577,11 +578,12 @@ def test_atomic_directory_success_creates_and_merges(tmp_path):
         (tmp / "figs").mkdir()
         (tmp / "figs" / "f.png").write_bytes(b"png")
     assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*")) == [
-        "figs", "figs/f.png", "summary.json"]
+        ".vidiscover", "figs", "figs/f.png", "summary.json"]
     with atomic_directory(out) as tmp:
         (tmp / "summary.json").write_text('{"v": 2}')
+    # the second run replaces the first as a whole: its figures do not survive
+    assert sorted(p.name for p in out.iterdir()) == [".vidiscover", "summary.json"]
     assert (out / "summary.json").read_text() == '{"v": 2}'
-    assert (out / "figs" / "f.png").exists()
     assert sorted(p.name for p in out.parent.iterdir()) == ["out"]
 
 
@@ -594,16 +596,45 @@ def test_atomic_directory_failure_leaves_nothing(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_atomic_directory_failure_keeps_existing_content(tmp_path):
+def test_atomic_directory_failure_or_interrupt_keeps_the_earlier_output(tmp_path):
     out = tmp_path / "out"
+    with atomic_directory(out) as tmp:
+        (tmp / "old.json").write_text("old")
+    for exc in (InputError("bad"), KeyboardInterrupt()):
+        with pytest.raises(type(exc)):
+            with atomic_directory(out) as tmp:
+                (tmp / "old.json").write_text("new")
+                raise exc
+        assert [p.name for p in tmp_path.iterdir()] == ["out"]
+        assert (out / "old.json").read_text() == "old"
+
+
+def test_atomic_directory_refuses_a_folder_it_did_not_write(tmp_path):
+    out = tmp_path / "mine"
     out.mkdir()
-    (out / "old.json").write_text("old")
-    with pytest.raises(InputError, match="bad"):
-        with atomic_directory(out) as tmp:
-            (tmp / "old.json").write_text("new")
-            raise InputError("bad")
-    assert [p.name for p in tmp_path.iterdir()] == ["out"]
-    assert [(p.name, p.read_text()) for p in out.iterdir()] == [("old.json", "old")]
+    (out / "thesis.tex").write_text("precious")
+    with pytest.raises(InputError, match="holds files that vidiscover did not write"):
+        with atomic_directory(out):
+            pass
+    assert [p.name for p in out.iterdir()] == ["thesis.tex"]
+    (tmp_path / "empty").mkdir()
+    with atomic_directory(tmp_path / "empty") as tmp:   # an empty folder is fine
+        (tmp / "x.json").write_text("{}")
+    assert (tmp_path / "empty" / "x.json").exists()
+
+
+def test_unwritable_output_is_refused_before_any_work(tmp_path, monkeypatch):
+    import errno
+    import tempfile
+
+    def read_only_fs(*args, **kwargs):
+        raise OSError(errno.EROFS, "Read-only file system")
+
+    monkeypatch.setattr(tempfile, "mkstemp", read_only_fs)
+    with pytest.raises(InputError, match=r"cannot write in .* \(Read-only file system\); "
+                                         "choose a writable --out"):
+        check_output_dir(tmp_path / "out")
+    assert list(tmp_path.iterdir()) == []
 
 
 def test_atomic_directory_refuses_a_file(tmp_path):

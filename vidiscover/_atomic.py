@@ -170,9 +170,56 @@ def write_json(path: str | os.PathLike, obj: Any, indent: int | None = 2) -> Pat
     return path
 
 
+#: File that marks a directory as an output of vidiscover (replaced as a whole).
+MARKER = ".vidiscover"
+_MARKER_TEXT = ("This folder was written by vidiscover. The next command writing here "
+                "replaces it as a whole.\n")
+
+
+def check_output_dir(out: str | os.PathLike) -> Path:
+    """Refuse, in one line, an output directory that cannot be replaced or written.
+
+    A directory may be written when it does not exist yet, is empty, or was written
+    by vidiscover (it holds :data:`MARKER`); it is then replaced as a whole. A file,
+    a folder holding anything else, or a location that cannot be written is refused.
+
+    Raises
+    ------
+    InputError
+        With what is wrong and how to fix it.
+    """
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise InputError(f"{out}: exists and is not a directory; choose another --out")
+    if out.is_dir() and not (out / MARKER).exists() and any(out.iterdir()):
+        raise InputError(f"{out}: holds files that vidiscover did not write; choose a new "
+                         "or empty --out (a folder vidiscover wrote is replaced as a whole)")
+    check_writable(out)
+    return out
+
+
+def check_writable(target: str | os.PathLike) -> None:
+    """Refuse, in one line, a path whose nearest existing folder cannot be written.
+
+    Probes by creating and removing a temporary file (permission bits do not tell:
+    root may write a mode 555 folder but not a read-only file system).
+    """
+    target = Path(target)
+    parent = target if target.is_dir() else target.parent
+    while not parent.exists():
+        parent = parent.parent
+    try:
+        fd, probe = tempfile.mkstemp(dir=parent, prefix=".vidiscover-probe.")
+    except OSError as err:
+        raise InputError(f"{target}: cannot write in {parent} ({err.strerror or err}); "
+                         "choose a writable --out") from None
+    os.close(fd)
+    os.unlink(probe)
+
+
 @contextlib.contextmanager
 def atomic_directory(out_dir: str | os.PathLike) -> Iterator[Path]:
-    """Write a stage's outputs into a temporary sibling, then move them into place.
+    """Write a stage's outputs into a temporary sibling, then put it in place whole.
 
     Parameters
     ----------
@@ -187,14 +234,15 @@ def atomic_directory(out_dir: str | os.PathLike) -> Iterator[Path]:
     Raises
     ------
     InputError
-        ``out_dir`` is an existing file, or cannot be created.
+        ``out_dir`` is a file, a folder holding files vidiscover did not write, or
+        cannot be created (:func:`check_output_dir`).
 
     Notes
     -----
-    On success every entry of the temporary directory is moved into ``out_dir``
-    (replacing entries of the same name, keeping others). On any exception the
-    temporary directory and the parents created for it are removed, ``out_dir`` is
-    left as it was and the exception propagates.
+    On success the temporary directory, marked with :data:`MARKER`, replaces
+    ``out_dir`` as a whole (nothing of an earlier run survives). On any exception,
+    Ctrl-C included, the temporary directory and the parents created for it are
+    removed, ``out_dir`` is left as it was and the exception propagates.
 
     Examples
     --------
@@ -203,12 +251,10 @@ def atomic_directory(out_dir: str | os.PathLike) -> Iterator[Path]:
     >>> with atomic_directory(base / "out") as tmp:
     ...     _ = (tmp / "summary.json").write_text("{}")
     >>> sorted(p.name for p in (base / "out").iterdir())
-    ['summary.json']
+    ['.vidiscover', 'summary.json']
     >>> import shutil; shutil.rmtree(base)
     """
-    out = Path(out_dir)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"{out}: exists and is not a directory; choose another --out")
+    out = check_output_dir(out_dir)
     created = []                    # parents to create, deepest first
     parent = out.parent
     while not parent.exists():
@@ -223,27 +269,28 @@ def atomic_directory(out_dir: str | os.PathLike) -> Iterator[Path]:
                          f"({err.strerror or err}); check the path and permissions") from None
     try:
         yield tmp
+        (tmp / MARKER).write_text(_MARKER_TEXT, encoding="utf-8")
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
         _remove_dirs(created)
         raise
+    old = None
     try:
-        out.mkdir(exist_ok=True)
-        _merge(tmp, out)
-    finally:
+        if out.exists():
+            old = _temp_name(out, "old")
+            out.rename(old)
+        tmp.rename(out)
+    except BaseException:
+        if old is not None and not out.exists():
+            old.rename(out)
         shutil.rmtree(tmp, ignore_errors=True)
+        raise
+    finally:
+        if old is not None and out.exists():
+            shutil.rmtree(old, ignore_errors=True)
 
 
 def _remove_dirs(created: list[Path]) -> None:
     for d in created:
         with contextlib.suppress(OSError):
             d.rmdir()
-
-
-def _merge(src: Path, dst: Path) -> None:
-    for entry in sorted(src.iterdir()):
-        target = dst / entry.name
-        if entry.is_dir() and not entry.is_symlink() and target.is_dir():
-            _merge(entry, target)
-        else:
-            _replace(entry, target)

@@ -25,13 +25,20 @@ from typing import Any
 import numpy as np
 
 from . import _io_checks as checks
-from ._atomic import atomic_directory, dump_json, to_jsonable, write_group, write_json
+from ._atomic import (
+    atomic_directory,
+    check_output_dir,
+    dump_json,
+    to_jsonable,
+    write_group,
+    write_json,
+)
 from .errors import InputError
 from .params import G_ACCEL
 from .recording import Metadata, Recording
 
 __all__ = ["FORMATS", "read_recording", "read_metadata", "read_truth", "write_recording",
-           "write_json", "to_jsonable", "atomic_directory"]
+           "write_json", "to_jsonable", "atomic_directory", "check_output_dir"]
 
 #: Recording file formats, by suffix.
 FORMATS = (".csv", ".parquet", ".npz")
@@ -136,6 +143,9 @@ def _csv_fast(data: bytes, delim: str, names: list[str]) -> dict[str, np.ndarray
             convert_options=pacsv.ConvertOptions(
                 column_types={c: pa.float64() for c in names}, include_columns=names))
         cols = {c: np.asarray(table.column(c).to_numpy(), dtype=float) for c in names}
+    except pa.ArrowCancelled:
+        # pyarrow turns Ctrl-C during the parse into ArrowCancelled: an interrupt
+        raise KeyboardInterrupt from None
     except Exception:  # noqa: BLE001 - any doubt: the csv-module path diagnoses it
         return None
     if table.num_rows == 0 or not all(np.isfinite(v).all() for v in cols.values()):

@@ -105,7 +105,8 @@ def json_rows(cli, n):
                     "bifurcation.png"))
 def holds(cli, out):
     names = sorted(p.name for p in (cli["dir"] / out).iterdir())
-    assert names == ["bifurcation.parquet", "bifurcation.png", "sweep.json", "sweep.parquet"]
+    assert names == [".vidiscover", "bifurcation.parquet", "bifurcation.png", "sweep.json",
+                     "sweep.parquet"]
 
 
 @then(parsers.parse("the command fails with status {code:d}"))

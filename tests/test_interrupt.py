@@ -1,0 +1,54 @@
+"""Ctrl-C stops a command promptly, exits 130 and leaves neither output nor temp files."""
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+pytestmark = pytest.mark.skipif(os.name != "posix", reason="sends SIGINT")
+
+
+def _write_recordings(folder, n, seconds):
+    fs = 6400.0
+    t = np.arange(int(seconds * fs)) / fs
+    rng = np.random.default_rng(0)
+    header = "t,x,a,xe\n"
+    for k in range(n):
+        x = 2e-3 * np.sin(2 * np.pi * 8 * t) + rng.normal(0, 1e-6, t.size)
+        a = -(2 * np.pi * 8) ** 2 * 2e-3 * np.sin(2 * np.pi * 8 * t) + rng.normal(0, 0.05, t.size)
+        xe = 5e-4 * np.sin(2 * np.pi * 8 * t)
+        body = "\n".join(f"{a_:.8f},{b_:.6e},{c_:.6e},{d_:.6e}"
+                         for a_, b_, c_, d_ in zip(t, x, a, xe))
+        (folder / f"r{k:02d}.csv").write_text(header + body + "\n")
+        (folder / f"r{k:02d}.json").write_text(json.dumps({"b": 0.009}))
+
+
+@pytest.mark.slow
+def test_sigint_at_any_point_of_a_multi_file_analyze_leaves_nothing(tmp_path):
+    _write_recordings(tmp_path, 8, 60.0)       # large files: the CSV read takes a while
+    files = sorted(p.name for p in tmp_path.glob("r*.csv"))
+    interrupted = 0
+    for k, delay in enumerate((0.3, 1.2, 2.0, 2.8, 3.6, 4.5)):
+        out = f"out{k}"
+        proc = subprocess.Popen([sys.executable, "-m", "vidiscover.cli", "analyze", *files,
+                                 "--out", out, "--no-figures"], cwd=tmp_path,
+                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        time.sleep(delay)
+        sent = time.monotonic()
+        proc.send_signal(signal.SIGINT)
+        _, err = proc.communicate(timeout=60)
+        stopped = time.monotonic() - sent
+        if proc.returncode == 0:               # finished before the signal
+            continue
+        interrupted += 1
+        assert proc.returncode == 130, (delay, err)
+        assert stopped < 5.0, (delay, stopped)
+        assert not (tmp_path / out).exists(), delay
+        leftovers = [p.name for p in tmp_path.iterdir() if p.name.startswith(".")]
+        assert leftovers == [], (delay, leftovers)
+    assert interrupted >= 5
