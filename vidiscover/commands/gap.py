@@ -52,8 +52,18 @@ def human_gap(doc: dict) -> str:
     lines.append(f"  unexplained share: {100 * doc['unexplained']:.0f} %  -> verdict: "
                  f"{doc['verdict']}")
     if doc.get("out"):
-        lines.append(f"  written to {doc['out']}/ (summary.json, figures/, report.html)")
+        lines.append(f"  written to {doc['out']}/ ({', '.join(_top_level(doc['files']))})")
     return "\n".join(lines)
+
+
+def _top_level(files: list[str]) -> list[str]:
+    """The written files, with folders named once (``figures/``)."""
+    out: list[str] = []
+    for f in files:
+        name = f.split("/", 1)[0] + "/" if "/" in f else f
+        if name not in out:
+            out.append(name)
+    return out
 
 
 def _html(doc: dict, figures: list[str]) -> str:

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ..cli import emit, handle_errors
+from ..cli import check_out_file, emit, handle_errors, recording_paths
 from ..errors import InputError
 from ..params import PRESETS
 
@@ -19,7 +19,7 @@ def _check_model_out(out: Path) -> Path:
     if not out.parent.is_dir():
         raise InputError(f"--out {out}: directory {out.parent} does not exist; create it "
                          "first")
-    return out
+    return check_out_file(out)
 
 
 def _proba_text(proba: dict) -> str:
@@ -28,8 +28,7 @@ def _proba_text(proba: dict) -> str:
 
 
 @click.command()
-@click.argument("recordings", nargs=-1, required=True,
-                type=click.Path(dir_okay=False, path_type=Path))
+@click.argument("recordings", nargs=-1, type=click.Path(path_type=Path))
 @click.option("--meta", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Metadata JSON for every recording (default: each recording's sidecar).")
 @click.option("--model", "model_path", type=click.Path(dir_okay=False, path_type=Path),
@@ -44,10 +43,22 @@ def classify(recordings, meta, model_path, as_json):
     Every recording is analysed from its sensor data alone (impacts, return map,
     LO response) and labelled by the regime classifier; a warning is printed when
     a recording lies outside the classifier's training domain.
-    """
+
+    \b
+    Labels (ipc: impacts per forcing cycle, after the transient):
+      no_impact   fewer than one impact per 20 cycles
+      1ipc        periodic, one impact in >= 90 % of cycles
+      2ipc_sym    periodic, two alternating impacts per cycle, evenly spaced
+      2ipc_asym   periodic, two alternating impacts per cycle, unevenly spaced
+      multi_ipc   periodic, anything else (3+ impacts, chatter, same-wall repeats)
+      smr         strongly modulated response: impacts in bursts on a slowly
+                  modulated LO envelope
+      chaotic     impacts, but neither periodic nor SMR
+    """  # noqa: D301 - the backspace is click's no-rewrap marker
     from ..io import read_recording
     from ..regimes.classifier import load_default_model, load_model
 
+    recordings = recording_paths(recordings)
     recs = [read_recording(p, meta=meta) for p in recordings]
     model = load_model(model_path) if model_path is not None else load_default_model()
     results = [model.classify(rec, file=str(p)).to_dict() for p, rec in zip(recordings, recs)]
