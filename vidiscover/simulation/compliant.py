@@ -252,9 +252,12 @@ class _Event:
 class _CompliantLoop(_Loop):
     """Event loop of the compliant engine (flights of the exact engine reused when mu = 0)."""
 
-    def __init__(self, cm: _CModel, numeric: bool, rtol: float, atol: float) -> None:
+    def __init__(self, cm: _CModel, numeric: bool, rtol: float, atol: float,
+                 steps: tuple[float, float] = (16.0, 1.0)) -> None:
         super().__init__(cm.exact)
         self.cm = cm
+        # bounds of solve_ivp steps: contact duration / steps[0], flight grid * steps[1]
+        self.steps = steps
         self.numeric = numeric or cm.fric > 0.0
         self.rtol = rtol
         w0 = math.sqrt(cm.p.k1 / cm.p.m1)
@@ -473,7 +476,7 @@ class _CompliantLoop(_Loop):
             return s * X[2] - b
         dur = wall.duration(abs(X0[3]), cm.m_eff)
         te, Xe, k = self._ivp(t0, X0, side, [_Event(ev_gate, -1.0), _Event(ev_delta, -1.0)],
-                              max_step=min(dur / 16.0, self.m.h))
+                              max_step=min(dur / self.steps[0], self.m.h))
         if k < 0:
             return te, Xe, None
         inside = k == 1 or s * Xe[2] - b <= 0.0
@@ -498,12 +501,12 @@ class _CompliantLoop(_Loop):
                 d = s * X[2] - b
                 return wall.gate(d, s * X[3]) if d > 0 else -1.0
             te, Xe, k = self._ivp(t0, X0, 0, [_Event(ev_in, -1.0), _Event(ev_force, 1.0)],
-                                  max_step=self.m.h)
+                                  max_step=self.m.h * self.steps[1])
             if k == 0:
                 Xe[2] = s * b
             return te, Xe, k + 1
         events = [_Event(lambda t, X: X[2] - b, 1.0), _Event(lambda t, X: X[2] + b, -1.0)]
-        te, Xe, k = self._ivp(t0, X0, 0, events, max_step=self.m.h)
+        te, Xe, k = self._ivp(t0, X0, 0, events, max_step=self.m.h * self.steps[1])
         if k < 0:
             return te, Xe, 0
         side = RIGHT if k == 0 else LEFT
@@ -622,7 +625,8 @@ def simulate_compliant(params: SystemParams, effects: Effects | None = None,
     (0, False, True)
     """
     cm = _prepare(params, effects, contact, options, option_kw)
-    return _CompliantLoop(cm, numeric=False, rtol=cm.opt.contact_rtol, atol=1e-12).run()
+    return _CompliantLoop(cm, numeric=False, rtol=cm.opt.contact_rtol, atol=1e-12,
+                          steps=(4.0, 2.0)).run()
 
 
 def simulate_reference(params: SystemParams, effects: Effects | None = None, contact=None,
