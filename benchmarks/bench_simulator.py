@@ -20,10 +20,17 @@ attractor, is the meaningful comparison there. The second default case (the pape
 Table 2 restitution, r_right = 0.8782, r_left = 0.2018) is not sensitive and agrees
 everywhere.
 
+A last section times the compliant-contact engine (DESIGN.md section 9) on the same
+rig with Kelvin-Voigt walls k = 3e7 N/m, r = 0.7 (target <= 1 s), against its fully
+numerical reference ``simulate_reference``, plus a chatter (r_left 0.2), a
+Hunt-Crossley and a friction case, and its rigid limit: impact times at k = 1e8 N/m
+vs the exact engine over 20 periods (target 1e-4 s).
+
 Usage::
 
     python benchmarks/bench_simulator.py [N] [--b 0.009] [--settle 20] [--duration 5.12]
                                          [--effect NAME=VALUE ...] [--json]
+                                         [--no-compliant]
 """
 
 from __future__ import annotations
@@ -43,13 +50,16 @@ import scipy
 sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
 
 from reference_ivp import reference_impacts  # noqa: E402
+from test_compliant import kv_clipped_restitution, one_impact_errors  # noqa: E402
 
 from vidiscover.effects import Effects  # noqa: E402
 from vidiscover.params import preset  # noqa: E402
-from vidiscover.simulation import simulate  # noqa: E402
+from vidiscover.simulation import simulate, simulate_reference  # noqa: E402
 
 TOL = 1e-6      # s, impact-time agreement target
 RATIO = 100.0   # speed-up target
+COMPLIANT_TIME = 1.0    # s, compliant engine on the paper rig, 25.12 s simulated
+RIGID_TOL = 1e-4        # s, compliant (k = 1e8) vs exact impact times over 20 periods
 
 
 def best_of_interleaved(n: int, *fns):
@@ -123,6 +133,77 @@ def run_case(name: str, params, effects: Effects, settle: float, duration: float
     }
 
 
+def run_compliant(params, settle: float, duration: float, repeat: int) -> dict:
+    """The compliant engine: speed on the paper rig, reference, rigid limit."""
+    kv = "kelvin-voigt:k=3e7,r=0.7"
+    (t_fast,), (res,) = best_of_interleaved(
+        repeat, lambda: simulate(params, contact=kv, settle=settle, duration=duration))
+    t0 = time.perf_counter()
+    ref = simulate_reference(params, None, kv, settle=settle, duration=duration)
+    t_ref = time.perf_counter() - t0
+    n = min(res.impacts.n, ref.impacts.n)
+    out = {"kv": {"time_s": t_fast, "impacts": [res.impacts.n, ref.impacts.n],
+                  "events": res.n_events, "time_ref_s": t_ref,
+                  "max_dt_vs_ref": float(np.abs(res.impacts.t[:n] - ref.impacts.t[:n]).max()),
+                  "r_rms": float(np.sqrt(np.mean(res.impacts.r ** 2)))}}
+    others = {"chatter (r 0.88 / 0.2)": (None, ["right=kv:k=3e7,r=0.88", "left=kv:k=3e7,r=0.2"]),
+              "hunt-crossley k=1e9 alpha=0.3": (None, "hunt-crossley:k=1e9,alpha=0.3"),
+              "friction mu 0.15 tilt 2 deg": (Effects.parse(["coulomb_friction=0.15",
+                                                              "inclination=2"]), kv)}
+    out["others"] = {}
+    for name, (fx, spec) in others.items():
+        t0 = time.perf_counter()
+        r = simulate(params, fx, contact=spec, settle=settle, duration=duration)
+        out["others"][name] = {"time_s": time.perf_counter() - t0, "impacts": r.impacts.n,
+                               "status": r.status}
+    # rigid limit over 20 periods, the exact engine with the clipped KV restitution
+    span = 20.0 / params.frequency
+    rigid = {}
+    for label, kw in (("default start", {}), ("ball at rest", {"initial": (0, 0, 0, 0)})):
+        ex = simulate(params.replace(r=kv_clipped_restitution(0.7)), settle=0.0,
+                      duration=span, **kw)
+        row = {}
+        for k in (1e6, 1e7, 1e8, 1e9):
+            c = simulate(params, contact=f"kv:k={k:g},r=0.7", settle=0.0, duration=span, **kw)
+            m = min(c.impacts.n, ex.impacts.n)
+            d = np.abs(c.impacts.t[:m] - ex.impacts.t[:m])
+            row[f"{k:g}"] = {"n": [c.impacts.n, ex.impacts.n], "max": float(d.max()),
+                             "first5": float(d[:5].max()),
+                             "one_impact": float(np.abs(one_impact_errors(
+                                 c, kv_clipped_restitution(0.7))).max())}
+        rigid[label] = row
+    out["rigid"] = rigid
+    return out
+
+
+def print_compliant(c: dict, repeat: int) -> None:
+    kv = c["kv"]
+    ok = kv["time_s"] <= COMPLIANT_TIME
+    print()
+    load = os.getloadavg() if hasattr(os, "getloadavg") else (math.nan,) * 3
+    print("== compliant engine, kelvin-voigt k = 3e7 N/m, r = 0.7 (both walls); load average "
+          f"{load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
+    print(f"  simulate(contact=...)  {kv['time_s']:.3f} s (best of {repeat}), "
+          f"{kv['impacts'][0]} contacts, {kv['events']} phases, r rms {kv['r_rms']:.4f}"
+          f" -> target <= {COMPLIANT_TIME:g} s: {'met' if ok else 'NOT met'}")
+    print(f"  simulate_reference     {kv['time_ref_s']:.3f} s (once), {kv['impacts'][1]} "
+          f"contacts; ratio {kv['time_ref_s'] / kv['time_s']:.0f}x; impact times agree to "
+          f"{kv['max_dt_vs_ref']:.1e} s")
+    for name, o in c["others"].items():
+        print(f"  {name:30s} {o['time_s']:.3f} s (once), {o['impacts']} contacts, "
+              f"status {o['status']}")
+    for label, row in c["rigid"].items():
+        k8 = row["1e+08"]
+        verdict = "met" if k8["max"] <= RIGID_TOL and k8["n"][0] == k8["n"][1] else "NOT met"
+        local = "met" if k8["one_impact"] <= RIGID_TOL else "NOT met"
+        print(f"  rigid limit, 20 periods, {label} (exact engine with the clipped r):")
+        for k, v in row.items():
+            print(f"    k={k}: n {v['n'][0]}/{v['n'][1]}, whole sequence max {v['max']:.1e} s "
+                  f"(first 5: {v['first5']:.1e} s), one-impact max {v['one_impact']:.1e} s")
+        print(f"    k = 1e8 vs target {RIGID_TOL:g} s: whole sequence {verdict}, "
+              f"one impact {local}")
+
+
 def machine() -> dict:
     return {"platform": platform.platform(), "python": platform.python_version(),
             "processor": platform.processor() or platform.machine(),
@@ -149,6 +230,8 @@ def main(argv=None) -> int:
     ap.add_argument("--effect", action="append", default=None,
                     help="run one case with these effects instead of the default two")
     ap.add_argument("--json", action="store_true", help="print one JSON document")
+    ap.add_argument("--no-compliant", action="store_true",
+                    help="skip the compliant-contact engine section")
     args = ap.parse_args(argv)
     if args.repeat < 1:
         ap.error(f"N must be >= 1, was {args.repeat}")
@@ -162,8 +245,11 @@ def main(argv=None) -> int:
     info = machine()
     rows = [run_case(name, params, fx, args.settle, args.duration, args.repeat)
             for name, fx in cases]
+    compliant = None if args.no_compliant else run_compliant(params, args.settle,
+                                                              args.duration, args.repeat)
     if args.json:
-        print(json.dumps({"machine": info, "repeat": args.repeat, "cases": rows}, indent=2))
+        print(json.dumps({"machine": info, "repeat": args.repeat, "cases": rows,
+                          "compliant": compliant}, indent=2))
         return 0
 
     print(f"machine: {info['platform']}, {info['processor']}, cpu_count {info['cpu_count']}"
@@ -188,6 +274,8 @@ def main(argv=None) -> int:
         print(f"  agreement, all impacts   : {fmt_cmp(r['all'])}")
         print(f"  sensitivity (simulate vs itself, ball speed +1 ulp): "
               f"{fmt_cmp(r['sensitivity_1ulp'])}")
+    if compliant is not None:
+        print_compliant(compliant, args.repeat)
     return 0
 
 
