@@ -123,7 +123,7 @@ class _Wall:
 class _KVSystem:
     """Closed form of a Kelvin-Voigt contact on one wall: X' = A X + f(t), X = (x, v, z, u)."""
 
-    def __init__(self, cm: _CModel, wall: _Wall) -> None:
+    def __init__(self, cm: _CModel, wall: _Wall, fsign: int = 0) -> None:
         p, s = cm.p, wall.side
         m1, m2, k, c = p.m1, p.m2, wall.k, wall.c
         A = np.array([[0.0, 1.0, 0.0, 0.0],
@@ -131,6 +131,8 @@ class _KVSystem:
                       [0.0, 0.0, 0.0, 1.0],
                       [p.k1 / m1, p.c1 / m1, -k / m1 - k / m2, -c / m1 - c / m2]])
         f0 = np.array([0.0, -s * k * cm.b / m1, 0.0, s * k * cm.b * (1 / m1 + 1 / m2) + cm.gs])
+        # saturated friction of sign fsign: +fric on the LO, -fric on the ball
+        f0 += fsign * cm.fric * np.array([0.0, 1 / m1, 0.0, -1 / m1 - 1 / m2])
         self.side, self.k, self.c, self.b = s, k, c, cm.b
         self.lam, self.V = np.linalg.eig(A)
         self.Vinv = np.linalg.inv(self.V)
@@ -183,7 +185,11 @@ class _CModel:
                       LEFT: _Wall(LEFT, contact.left, self.m_eff)}
         self.fric = fx.mu * p.m2 * G_ACCEL
         self.vs = opt.friction_speed
-        self.kv = {s: _KVSystem(self, w) for s, w in self.walls.items() if w.kv}
+        signs = (-1, 1) if self.fric > 0 else (0,)
+        #: closed-form KV contact per (wall, sign of saturated friction), and their ids
+        self.kv = {(s, f): _KVSystem(self, w, f) for s, w in self.walls.items() if w.kv
+                   for f in signs}
+        self.kv_ids = {key: i for i, key in enumerate(self.kv)}
         self._terms = [(float(w), float(bj.real), float(bj.imag)) for w, bj in
                        zip(self.base.omegas, self.base.complex_amplitudes, strict=True)]
 
@@ -380,10 +386,10 @@ class _CompliantLoop(_Loop):
             start_wall = 0
         return t, X, 0
 
-    def _leaving_band(self, t, X) -> bool:
-        """Whether ``|z'|`` grows at ``|z'| = BAND v_s`` (the flight leaves the band)."""
+    def _leaving_band(self, t, X, active: int = 0) -> bool:
+        """Whether ``|z'|`` grows at ``|z'| = BAND v_s`` (leaving the band)."""
         s = 1.0 if X[3] > 0 else -1.0
-        return s * self.cm.rhs(0)(t, X)[3] > 0.0
+        return s * self.cm.rhs(active)(t, X)[3] > 0.0
 
     def _band_events(self, start_wall, vb):
         b = self.cm.b
@@ -509,34 +515,66 @@ class _CompliantLoop(_Loop):
         Returns (t, X, inside): inside True when the penetration is zero there, False
         when the ball is still beyond the wall, None at the end of the span.
         """
-        if side in self.cm.kv and not (self.numeric or self.friction):
+        if self.cm.walls[side].kv and not self.numeric:
             return self._kv_contact(t, X, side)
         return self._ivp_contact(t, X, side)
 
     def _kv_contact(self, t0, X0, side):
-        sysm = self.cm.kv[side]
+        """Kelvin-Voigt contact: closed form, friction saturated; solve_ivp inside the band."""
+        vb = BAND * self.cm.vs
+        t, X = t0, X0
+        while True:
+            if self.friction and (abs(X[3]) < vb or (abs(X[3]) == vb
+                                                     and not self._leaving_band(t, X, side))):
+                t, X, k = self._ivp_contact(t, X, side, band=vb)
+                if k != 2:
+                    return t, X, k
+                continue
+            fs = (1 if X[3] > 0 else -1) if self.friction else 0
+            t, X, inside = self._kv_closed(t, X, side, fs, vb)
+            if inside != 2:
+                return t, X, inside
+            if not self._count(t):
+                return t, X, None
+
+    def _kv_closed(self, t0, X0, side, fs, vb):
+        """Closed-form KV contact up to the force's zero (or, with friction, the band)."""
+        key = (side, fs)
+        sysm = self.cm.kv[key]
         c = sysm.coeffs(t0, X0)
         n = 64
         h = sysm.h
         ta = t0
         t_end = self.t_end
         grid = np.arange(n + 1, dtype=float)
-        te = None
+        te, kind = None, None
         while ta < t_end:
             tt = ta + h * grid
             X, dX = sysm.state(tt, t0, c)
             g, _ = sysm.gate(X, dX)
             if ta == t0:
                 g[0] = max(g[0], 0.0)
-            hit = np.flatnonzero(g[1:] <= 0.0)
+            ev = g[1:] <= 0.0
+            if fs:
+                ev |= fs * X[1:, 3] <= vb
+            hit = np.flatnonzero(ev)
             if hit.size:
                 k = int(hit[0])
-
-                def fg(s):
-                    Xs, dXs = sysm.state(np.array([s]), t0, c)
-                    gg, dg = sysm.gate(Xs, dXs)
-                    return float(gg[0]), float(dg[0])
-                te = bracketed_newton(fg, tt[k], tt[k + 1], float(g[k]), float(g[k + 1]))
+                if g[k + 1] <= 0.0:
+                    def fg(s):
+                        Xs, dXs = sysm.state(np.array([s]), t0, c)
+                        gg, dg = sysm.gate(Xs, dXs)
+                        return float(gg[0]), float(dg[0])
+                    te, kind = bracketed_newton(fg, tt[k], tt[k + 1], float(g[k]),
+                                                float(g[k + 1])), 0
+                if fs and fs * X[k + 1, 3] <= vb:
+                    def fb(s):
+                        Xs, dXs = sysm.state(np.array([s]), t0, c)
+                        return fs * float(Xs[0, 3]) - vb, fs * float(dXs[0, 3])
+                    tb = bracketed_newton(fb, tt[k], tt[k + 1], fs * X[k, 3] - vb,
+                                          fs * X[k + 1, 3] - vb)
+                    if te is None or tb < te:
+                        te, kind = tb, 2
                 break
             ta = tt[-1]
             if ta - t0 > 30.0 / sysm.sigma:      # the contact mode has died out
@@ -546,11 +584,13 @@ class _CompliantLoop(_Loop):
             te = t_end
         Xe = sysm.state(np.array([te]), t0, c)[0][0]
         if te < t_end:
-            inside = side * Xe[2] - self.cm.b <= 0.0
-        self.kvsegs.append((t0, te, side, *c))
+            inside = 2 if kind == 2 else bool(side * Xe[2] - self.cm.b <= 0.0)
+        self.kvsegs.append((t0, te, self.cm.kv_ids[key], *c))
         self._seg(KV, t0, te, len(self.kvsegs) - 1)
-        if inside:
+        if inside is True:
             Xe[2] = side * self.cm.b
+        if inside == 2:
+            Xe[3] = fs * vb
         return te, Xe, inside
 
     def _ivp(self, t0, X0, active, events, max_step):
@@ -569,7 +609,11 @@ class _CompliantLoop(_Loop):
         self._seg(NUM, t0, te, len(self.numsegs) - 1)
         return te, Xe, k
 
-    def _ivp_contact(self, t0, X0, side):
+    def _ivp_contact(self, t0, X0, side, band: float | None = None):
+        """Integrated contact up to the force's zero (see :meth:`_contact_phase`).
+
+        With ``band``, also up to ``|z'| = band`` outward (then inside = 2).
+        """
         cm, wall, b = self.cm, self.cm.walls[side], self.cm.b
         s = side
 
@@ -578,12 +622,19 @@ class _CompliantLoop(_Loop):
 
         def ev_delta(t, X):
             return s * X[2] - b
+        events = [_Event(ev_gate, -1.0), _Event(ev_delta, -1.0)]
+        if band is not None:
+            events += [_Event(lambda t, X: X[3] - band, 1.0),
+                       _Event(lambda t, X: X[3] + band, -1.0)]
         dur = wall.duration(abs(X0[3]), cm.m_eff)
-        te, Xe, k = self._ivp(t0, X0, side, [_Event(ev_gate, -1.0), _Event(ev_delta, -1.0)],
+        te, Xe, k = self._ivp(t0, X0, side, events,
                               max_step=min(dur / self.steps[0], self.m.h))
         if k < 0:
             return te, Xe, None
-        inside = k == 1 or s * Xe[2] - b <= 0.0
+        if k >= 2:
+            Xe[3] = band if k == 2 else -band
+            return te, Xe, 2
+        inside = bool(k == 1 or s * Xe[2] - b <= 0.0)
         if inside:
             Xe[2] = s * b
         return te, Xe, inside
@@ -636,7 +687,7 @@ class CompliantResult(SimulationResult):
         kv = np.array(loop.kvsegs, dtype=complex).reshape(-1, 7)
         seg = {"t0": idx[:, 0], "t1": idx[:, 1], "kind": idx[:, 2].astype(int),
                "i": idx[:, 3].astype(int), "flight": fl, "kv_t0": kv[:, 0].real,
-               "kv_side": kv[:, 2].real.astype(int), "kv_c": kv[:, 3:], "num": loop.numsegs}
+               "kv_id": kv[:, 2].real.astype(int), "kv_c": kv[:, 3:], "num": loop.numsegs}
         return cls(cm.p, cm.fx, cm.b, cm.opt.settle, cm.opt.duration,
                    ImpactTable.from_rows(loop.impacts), [], loop.status, loop.message,
                    loop.n_events, seg, cm, cm.contact)
@@ -668,11 +719,11 @@ class CompliantResult(SimulationResult):
             tau = ts - f[:, 0]
             y = f[:, 6] + f[:, 7] * tau + 0.5 * f[:, 8] * tau ** 2
             X[sel] = np.column_stack([x, v, y - x, f[:, 7] + f[:, 8] * tau - v])
-        kv_side = np.zeros(t.size, dtype=int)
+        kv_id = np.full(t.size, -1)
         is_kv = kind == KV
-        kv_side[is_kv] = seg["kv_side"][sub[is_kv]]
-        for side, sysm in cm.kv.items():
-            sel = kv_side == side
+        kv_id[is_kv] = seg["kv_id"][sub[is_kv]]
+        for key, sysm in cm.kv.items():
+            sel = kv_id == cm.kv_ids[key]
             if sel.any():
                 j = sub[sel]
                 X[sel] = sysm.state(t[sel], seg["kv_t0"][j], seg["kv_c"][j])[0]
