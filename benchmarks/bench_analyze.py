@@ -110,7 +110,7 @@ def ball_rms(out, truth) -> float:
     """RMS (m) of reconstructed minus true ball position where a flight covers the sample."""
     y = out.reconstruction.ball_position(out.reconstruction.t)
     ok = np.isfinite(y)
-    return float(np.sqrt(np.mean((y[ok] - np.asarray(truth["motion"]["y"])[ok]) ** 2)))
+    return float(np.sqrt(np.mean((y[ok] - truth.motion.y[ok]) ** 2)))
 
 
 def accuracy(label: str, rec, truth, mu: float = 0.0) -> dict:

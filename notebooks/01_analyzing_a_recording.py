@@ -48,7 +48,7 @@ sim = simulate(preset("paper", b=B), Effects.parse(["asymmetric_restitution=0.88
                settle=SETTLE, duration=DURATION)
 rec, truth = record(sim, SensorConfig(), seed=1)
 print(f"{rec.n} samples at {rec.sample_rate:g} Hz ({rec.duration:.2f} s), b = {B * 1e3:g} mm; "
-      f"{len(truth['impacts'])} true impacts, regime {label_simulation(sim).label!r}")
+      f"{truth.impacts.n} true impacts, regime {label_simulation(sim).label!r}")
 
 # %% [markdown]
 # ## Analyze
@@ -115,7 +115,7 @@ print(f"precision {sc.precision:.3f}, recall {sc.recall:.3f} on {sc.n_detectable
 # %%
 R = out.reconstruction
 y = R.ball_position(rec.t)
-y_true = np.asarray(truth["motion"]["y"])
+y_true = truth.motion.y
 fig, ax = plt.subplots(figsize=(10, 4))
 ax.plot(rec.t[sel], (R.x[sel] + B) * 1e3, color="0.6", lw=0.8, label="walls x $\\pm$ b")
 ax.plot(rec.t[sel], (R.x[sel] - B) * 1e3, color="0.6", lw=0.8)
@@ -141,8 +141,7 @@ print(f"ball position error: {np.sqrt(np.mean((y[ok] - y_true[ok]) ** 2)) * 1e6:
 
 # %%
 tab = out.impact_table
-t_true = np.array([i["t"] for i in truth["impacts"]])
-r_true = np.array([i["r"] for i in truth["impacts"]])
+t_true, r_true = truth.impacts.t, truth.impacts.r
 ie, it = match_impacts(det.t, t_true)
 fig, ax = plt.subplots(figsize=(10, 3.5))
 for side, color, marker in (("right", "C3", "o"), ("left", "C0", "x")):

@@ -54,7 +54,7 @@ for k, b in enumerate((0.006, 0.0075, 0.009)):
     sim = simulate(preset("paper", b=b), effects, settle=SETTLE, duration=DURATION)
     rec, truth = record(sim, SensorConfig(), seed=k)
     recordings.append(rec)
-    print(f"b = {b * 1e3:g} mm: {len(truth['impacts'])} impacts simulated")
+    print(f"b = {b * 1e3:g} mm: {truth.impacts.n} impacts simulated")
 
 # %% [markdown]
 # ## Discovery

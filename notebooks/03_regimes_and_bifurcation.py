@@ -96,7 +96,7 @@ for b_mm in (6.0, 7.5, 9.0, 15.0, 17.5):
     rec, truth, _ = simulate_to_memory(preset("paper", b=b_mm * 1e-3),
                                        Effects.parse(PAPER_WALLS), seed=1, settle=20.0)
     c = model.classify(rec)
-    rg = truth["regime"]
+    rg = truth.regime
     rows.append({"b (mm)": b_mm, "simulated regime": rg["label"],
                  "classifier": c.label, "p(label)": round(c.proba[c.label], 3),
                  "true ipc": round(rg["ipc"], 2),
@@ -152,6 +152,6 @@ fig, ax = plt.subplots(figsize=(9, 3))
 ax.plot(rec.t, rec.x * 1e3, lw=0.5)
 ax.set_xlabel("t (s)")
 ax.set_ylabel("x (mm)")
-ax.set_title(f"f = {f_show:.2f} Hz: simulated {truth['regime']['label']}, "
+ax.set_title(f"f = {f_show:.2f} Hz: simulated {truth.label}, "
              f"classified {c.label} (p = {c.proba[c.label]:.2f})")
 plt.show()

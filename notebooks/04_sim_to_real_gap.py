@@ -43,7 +43,7 @@ FAST = os.environ.get("VIDISCOVER_NOTEBOOK_FAST") == "1"
 # %%
 withheld = Effects.parse(["inclination=5"])
 rec, truth, _ = simulate_to_memory(preset("paper", b=0.009, r=0.7), withheld, seed=11)
-print("regime:", truth["regime"]["label"], "| impacts:", len(truth["impacts"]))
+print("regime:", truth.label, "| impacts:", truth.impacts.n)
 
 # %% [markdown]
 # ## Diagnose it against the nominal model

@@ -43,9 +43,7 @@ def analysed(b: float, effects: tuple = ASYM, seed: int = 1, mu: float = 0.0,
 
 def true_r_rms(out, truth, side: str) -> tuple[float, int]:
     """RMS of the true r of the impacts whose r ``out`` used on wall ``side``."""
-    imps = truth["impacts"]
-    t_true = np.array([i["t"] for i in imps])
-    r_true = np.array([i["r"] for i in imps])
+    t_true, r_true = truth.impacts.t, truth.impacts.r
     det = out.detection
     ie, it = match_impacts(det.t, t_true)
     matched = np.full(det.n, np.nan)

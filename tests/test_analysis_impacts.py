@@ -49,7 +49,7 @@ def test_detection_meets_the_figures(b, seed):
 @pytest.mark.parametrize("b", CLEARANCES)
 def test_pulse_area_is_the_lo_velocity_jump(b):
     det, truth, s = _scores(b)
-    dv_true = np.array([i["dv"] for i in truth["impacts"]])[s.i_true]
+    dv_true = truth.impacts.dv[s.i_true]
     dv = det.dv[s.i_est]
     assert np.all(np.abs(dv - dv_true) <= 0.01 * np.abs(dv_true) + 4e-5)
     # the shape-free integral agrees too (on the strong pulses: next to weak chatter
@@ -89,7 +89,7 @@ def test_detection_with_finite_contact_duration(tau):
     assert s.precision >= 0.99 and s.recall >= 0.99, s
     assert s.timing_median <= 30e-6
     assert det.pulse.tau == pytest.approx(tau, rel=0.2)
-    dv_true = np.array([i["dv"] for i in truth["impacts"]])[s.i_true]
+    dv_true = truth.impacts.dv[s.i_true]
     strong = np.abs(dv_true) > 1e-3
     assert np.all(np.abs(det.dv[s.i_est] / dv_true - 1)[strong] < 0.05)
 
@@ -103,7 +103,7 @@ def test_clipped_pulses_are_flagged_and_still_found():
     c = det.columns
     assert det.n_clipped > 0 and (~c["reliable"]).sum() > 10
     # areas fitted on the unclipped samples stay within a few percent
-    dv_true = np.array([i["dv"] for i in truth["impacts"]])[s.i_true]
+    dv_true = truth.impacts.dv[s.i_true]
     bad = ~c["reliable"][s.i_est]
     assert np.all(np.abs(det.dv[s.i_est][bad] / dv_true[bad] - 1) < 0.05)
     assert any("clipped" in w for w in det.warnings)
@@ -117,8 +117,7 @@ def test_nan_dropout_is_masked():
     rec2 = Recording(rec.t, rec.x, a, rec.xe, rec.meta, name="dropout")
     det = detect_impacts(rec2)
     s = detection_scores(det.t, det.side, truth)
-    lost = detectable_truth(truth) & (np.abs(np.array([i["t"] for i in truth["impacts"]])
-                                             - 10200 / FS) < 0.04)
+    lost = detectable_truth(truth) & (np.abs(truth.impacts.t - 10200 / FS) < 0.04)
     assert s.precision >= 0.99
     assert s.n_matched >= s.n_detectable - lost.sum() - 1
     assert det.n_dropout == 401 and any("NaN" in w for w in det.warnings)

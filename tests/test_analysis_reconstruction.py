@@ -28,7 +28,7 @@ def _ball_rms(out, truth):
     rec_t = out.reconstruction.t
     y = out.reconstruction.ball_position(rec_t)
     ok = np.isfinite(y)
-    y_true = np.asarray(truth["motion"]["y"])
+    y_true = truth.motion.y
     return float(np.sqrt(np.mean((y[ok] - y_true[ok]) ** 2))), ok.mean()
 
 
@@ -44,9 +44,9 @@ def test_ball_position_is_reconstructed(b):
 def test_lo_velocity_from_acceleration(b):
     out, truth = analysed(b)
     R = out.reconstruction
-    xd = np.asarray(truth["motion"]["xd"])
+    xd = truth.motion.xd
     assert np.sqrt(np.mean((R.v - xd) ** 2)) < 1e-3
-    assert np.sqrt(np.mean((R.x - np.asarray(truth["motion"]["x"])) ** 2)) < 5e-6
+    assert np.sqrt(np.mean((R.x - truth.motion.x) ** 2)) < 5e-6
     # the laser derivative (paper Fig. 13, nonsmooth curve) is much noisier
     assert np.sqrt(np.mean((R.v_disp - xd) ** 2)) > 3 * np.sqrt(np.mean((R.v - xd) ** 2))
 
@@ -56,10 +56,9 @@ def test_pre_and_post_impact_lo_velocities():
     from vidiscover.analysis import detection_scores
     det = out.detection
     s = detection_scores(det.t, det.side, truth)
-    imps = truth["impacts"]
     ic = out.reconstruction.impact_columns
     for key in ("v_minus", "v_plus"):
-        true = np.array([imps[j][key] for j in s.i_true])
+        true = getattr(truth.impacts, key)[s.i_true]
         assert np.sqrt(np.mean((ic[key][s.i_est] - true) ** 2)) < 1e-3, key
 
 
@@ -68,7 +67,7 @@ def test_stick_flights_match_the_true_sticking_phases():
     fc = out.reconstruction.flight_columns
     stick = fc["kind"] == "stick"
     assert stick.sum() >= 35
-    ends = np.array([s["t_end"] for s in truth["sticking"] if s["where"] == "left"])
+    ends = np.array([s.t_end for s in truth.sticking if s.where == "left"])
     for tr in fc["t_release"][stick]:
         assert np.min(np.abs(ends - tr)) < 1e-3
     # the stick hypothesis closes to micrometres where it holds, to millimetres elsewhere

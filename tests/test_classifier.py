@@ -249,7 +249,7 @@ def test_paper_presets_get_their_simulated_regime(default_model, b_mm):
                                        Effects.parse(["asymmetric_restitution=0.8782,0.2018"]),
                                        seed=1, settle=20.0)
     out = default_model.classify(rec)
-    assert out.label == truth["regime"]["label"]
+    assert out.label == truth.label
     assert sum(out.proba.values()) == pytest.approx(1.0)
     assert out.proba[out.label] > 0.5
     assert not out.warnings

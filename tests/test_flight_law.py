@@ -74,8 +74,7 @@ def test_pooled_clearances_recover_support_and_values(mu, theta):
 
 def _launch_error(out, truth, law) -> float:
     """RMS error (m/s) of the ball launch velocities re-solved with ``law``."""
-    t_true = np.array([i["t"] for i in truth["impacts"]])
-    w_true = np.array([i["w_plus"] for i in truth["impacts"]])
+    t_true, w_true = truth.impacts.t, truth.impacts.w_plus
     ie, it = match_impacts(out.detection.t, t_true)
     w_at = np.full(out.detection.n, np.nan)
     w_at[ie] = w_true[it]

@@ -108,10 +108,50 @@ def test_truth_round_trip(tmp_path, simulated):
     path = tmp_path / "rec.parquet"
     files = write_recording(rec, path, truth=truth)
     assert files[-1] == tmp_path / "rec.truth.json"
-    expected = json.loads(json.dumps(to_jsonable(truth)))
-    assert read_truth(path) == expected
-    assert read_truth(tmp_path / "rec.truth.json") == expected
-    assert read_truth(path)["impacts"][0]["t"] == truth["impacts"][0]["t"]
+    assert json.loads((tmp_path / "rec.truth.json").read_text()) == json.loads(
+        json.dumps(to_jsonable(truth.to_dict())))
+    assert read_truth(path) == truth
+    assert read_truth(tmp_path / "rec.truth.json") == truth
+    assert read_truth(path).impacts.t[0] == truth.impacts.t[0]
+
+
+def test_truth_file_without_the_contact_keys_still_reads(tmp_path, simulated):
+    """Files written before ``contact``, ``t_in``, ``t_out``, ``v_in``, ``v_out``."""
+    _, _, truth = simulated
+    old = truth.to_dict()
+    del old["contact"]
+    for imp in old["impacts"]:
+        for key in ("t_in", "t_out", "v_in", "v_out"):
+            del imp[key]
+    path = tmp_path / "old.truth.json"
+    path.write_text(json.dumps(old))
+    back = read_truth(path)
+    assert back == truth and back.contact is None
+    np.testing.assert_array_equal(back.impacts.t_out, back.impacts.t)
+    np.testing.assert_array_equal(back.impacts.v_in, back.impacts.u_minus)
+
+
+@pytest.mark.parametrize("content, words", [
+    ('[1, 2]', "must be a JSON object"),
+    ('{"impacts": []}', "lacks params"),
+])
+def test_malformed_truth_is_one_line(tmp_path, simulated, content, words):
+    path = tmp_path / "rec.truth.json"
+    path.write_text(content)
+    with pytest.raises(InputError, match=words) as err:
+        read_truth(path)
+    assert_single_line_error(err, "rec.truth.json")
+
+
+def test_truth_impact_missing_a_key_is_one_line(tmp_path, simulated):
+    _, _, truth = simulated
+    bad = truth.to_dict()
+    del bad["impacts"][2]["r"]
+    path = tmp_path / "rec.truth.json"
+    path.write_text(json.dumps(bad))
+    with pytest.raises(InputError, match="impact 2 lacks r") as err:
+        read_truth(path)
+    assert_single_line_error(err, "rec.truth.json")
 
 
 def test_stale_truth_is_removed_when_rewriting_without_truth(tmp_path, simulated):

@@ -22,7 +22,10 @@ import vidiscover._atomic as vatomic
 import vidiscover.io as vio
 from vidiscover.errors import InputError
 from vidiscover.io import read_recording, write_recording
+from vidiscover.effects import Effects
+from vidiscover.params import preset
 from vidiscover.recording import Metadata, Recording
+from vidiscover.truth import GroundTruth, TrueImpacts, TrueMotion
 
 SETTINGS = settings(max_examples=60, deadline=None,
                     suppress_health_check=[HealthCheck.too_slow])
@@ -318,7 +321,12 @@ def _tiny_recording() -> Recording:
 
 
 TINY = _tiny_recording()
-TRUTH = {"impacts": [{"t": 0.1, "side": "right", "r": np.float64(0.88)}], "regime": None}
+TRUTH = GroundTruth(params=preset("paper", b=0.009), effects=Effects(), b_true=0.009,
+                    settle=1.0, duration=0.5, seed=0, sensors={},
+                    impacts=TrueImpacts.from_columns(t=[0.1], side=["right"],
+                                                     r=[np.float64(0.88)]),
+                    motion=TrueMotion(t0=0.0, dt=0.1, x=np.zeros(5), xd=np.zeros(5),
+                                      y=np.zeros(5), yd=np.zeros(5)))
 
 
 def _snapshot(d: Path) -> dict[str, bytes]:
@@ -350,7 +358,7 @@ def test_interrupted_write_leaves_no_partial_file(fmt, units, with_truth, existi
     with tempfile.TemporaryDirectory() as d:
         path = Path(d) / f"rec{fmt}"
         if existing:
-            write_recording(TINY, path, truth={"old": True}, units="SI")
+            write_recording(TINY, path, truth=TRUTH.with_regime({"label": "old"}), units="SI")
         before = _snapshot(Path(d))
         with ExitStack() as stack:
             stack.enter_context(mock.patch.object(vio, "_write_data", failing("data")))

@@ -44,7 +44,7 @@ def quiet():
     """A recording with no impact at all (friction holds the ball in a wide clearance)."""
     rec, truth, _ = simulate_to_memory(preset("paper", b=0.03), ["coulomb_friction=0.3"],
                                        seed=1, settle=3.0, duration=2.0, name="quiet")
-    assert truth["impacts"] == []
+    assert truth.impacts.n == 0
     return analyze(rec), truth
 
 
@@ -244,9 +244,9 @@ def test_a_record_without_impacts_is_reported(quiet, tmp_path):
 def test_compare_truth_counts_matches(case):
     result, truth = case
     c = compare_truth(result, truth)
-    assert c["impacts"]["n"] == len(truth["impacts"])
+    assert c["impacts"]["n"] == truth.impacts.n
     assert c["impacts"]["matched"] <= min(result.detection.n, c["impacts"]["n"])
-    assert c["regime"]["label"] == truth["regime"]["label"]
+    assert c["regime"]["label"] == truth.label
     assert c["restitution"]["right"]["rms"] == pytest.approx(R_RIGHT, abs=1e-9)
 
 

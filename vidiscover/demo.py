@@ -80,8 +80,8 @@ def run_demo(out: Path, seed: int = 0, progress: bool = True,
             entries.append({"href": f"{stem}/report.html", "summary": summary})
             rest = summary["restitution"]
             recordings.append({"name": stem, "b": b_mm / 1000,
-                               "n_impacts": len(truth["impacts"]),
-                               "regime": truth["regime"]["label"],
+                               "n_impacts": truth.impacts.n,
+                               "regime": truth.label,
                                "regime_classified": summary["regime"]["label"],
                                "detected": summary["impacts"]["n"],
                                "r_right_rms": rest["right"]["rms"],

@@ -36,6 +36,7 @@ from ._atomic import (
 from .errors import InputError
 from .params import G_ACCEL
 from .recording import Metadata, Recording
+from .truth import GroundTruth
 
 __all__ = ["FORMATS", "read_recording", "read_metadata", "read_truth", "write_recording",
            "write_json", "to_jsonable", "atomic_directory", "check_output_dir"]
@@ -372,7 +373,7 @@ def _truth_path(path: Path) -> Path:
     return path.with_name(f"{path.stem}.truth.json")
 
 
-def read_truth(path: str | os.PathLike) -> dict:
+def read_truth(path: str | os.PathLike) -> GroundTruth:
     """Ground truth of a simulated recording.
 
     Parameters
@@ -382,21 +383,22 @@ def read_truth(path: str | os.PathLike) -> dict:
 
     Returns
     -------
-    dict
+    GroundTruth
         The content of ``<stem>.truth.json``.
 
     Raises
     ------
     InputError
-        No truth file (only simulated recordings have one) or malformed JSON.
+        No truth file (only simulated recordings have one), malformed JSON or
+        content that is not a ground truth.
     """
     tp = _truth_path(Path(path))
     truth = _load_json(tp, "ground-truth file",
                        "only simulated recordings (vidiscover simulate) have one")
-    if not isinstance(truth, dict):
-        raise InputError(f"{tp}: ground truth must be a JSON object, found "
-                         f"{type(truth).__name__}; write it with vidiscover simulate")
-    return truth
+    try:
+        return GroundTruth.from_dict(truth)
+    except InputError as err:
+        raise InputError(f"{tp}: {err}") from None
 
 
 # =============================================================================== writing
@@ -434,8 +436,8 @@ def _columns_for(rec: Recording, units: str) -> dict[str, np.ndarray]:
             "xe_mV": rec.xe * 1000.0 * s["xe_mV_per_mm"]}
 
 
-def write_recording(rec: Recording, path: str | os.PathLike, truth: Mapping | None = None,
-                    units: str | None = None) -> list[Path]:
+def write_recording(rec: Recording, path: str | os.PathLike,
+                    truth: GroundTruth | None = None, units: str | None = None) -> list[Path]:
     """Write a recording, its metadata sidecar and optionally its ground truth.
 
     The files appear together or not at all: each is written to a temporary file in
@@ -449,10 +451,10 @@ def write_recording(rec: Recording, path: str | os.PathLike, truth: Mapping | No
     path : str or path-like
         Data file; the format follows the suffix (``.csv``, ``.parquet``, ``.npz``).
         The metadata go to ``<stem>.json``, the truth to ``<stem>.truth.json``.
-    truth : dict, optional
-        Ground truth of a simulation. Without it, a stale ``<stem>.truth.json`` left
-        by an earlier recording at this path is removed, so it cannot pass for this
-        recording's truth.
+    truth : GroundTruth, optional
+        Ground truth of a simulation, written as ``truth.to_dict()``. Without it, a
+        stale ``<stem>.truth.json`` left by an earlier recording at this path is
+        removed, so it cannot pass for this recording's truth.
     units : {"SI", "mV"}, optional
         Columns ``t, x, a, xe`` or ``t, x_mV, a_mV, xe_mV`` (converted with
         ``rec.meta.sensitivity``); default ``rec.meta.extra.get("units", "SI")``. The
@@ -490,5 +492,8 @@ def write_recording(rec: Recording, path: str | os.PathLike, truth: Mapping | No
         (path.with_suffix(".json"), lambda tmp: dump_json(tmp, meta, 2)),
     ]
     if truth is not None:
-        jobs.append((truth_path, lambda tmp: dump_json(tmp, truth, None)))
+        if not isinstance(truth, GroundTruth):
+            raise TypeError(f"truth must be a GroundTruth, was {type(truth).__name__}")
+        content = truth.to_dict()
+        jobs.append((truth_path, lambda tmp: dump_json(tmp, content, None)))
     return write_group(jobs, remove=() if truth is not None else (truth_path,))

@@ -7,6 +7,7 @@ from pathlib import Path
 import numpy as np
 
 from .recording import Recording
+from .truth import GroundTruth
 
 __all__ = ["figure", "plot_recording"]
 
@@ -22,14 +23,14 @@ def figure(nrows: int = 1, ncols: int = 1, **kw):
     return fig, axes
 
 
-def plot_recording(rec: Recording, truth: dict | None = None, path: Path | None = None,
+def plot_recording(rec: Recording, truth: GroundTruth | None = None, path: Path | None = None,
                    window: float = 1.0):
     """Acceleration, LO displacement (and true ball motion if known) and base motion.
 
     Parameters
     ----------
     rec : Recording
-    truth : dict, optional
+    truth : GroundTruth, optional
         Ground truth of a simulated recording: true impacts are marked and the true
         ball displacement is drawn between the walls x +/- b.
     path : Path, optional
@@ -47,10 +48,10 @@ def plot_recording(rec: Recording, truth: dict | None = None, path: Path | None 
     ax[2, 0].set_ylabel("$x_e$ (mm)")
     ax[2, 0].set_xlabel("t (s)")
     if truth is not None:
-        b = truth.get("b_true", rec.meta.b)
-        imps = [i for i in truth["impacts"] if i["t"] <= rec.t[0] + window]
+        b = truth.b_true
+        imps = truth.impacts.select(truth.impacts.t <= rec.t[0] + window)
         for side, marker, color in (("right", "x", "C3"), ("left", "+", "C1")):
-            ti = np.array([i["t"] for i in imps if i["side"] == side])
+            ti = imps.t[imps.side == side]
             if ti.size:
                 # mark each impact at the pulse's extreme sample (sign of the wall)
                 k = np.searchsorted(rec.t, ti)
@@ -58,14 +59,13 @@ def plot_recording(rec: Recording, truth: dict | None = None, path: Path | None 
                 vals = rec.a[win]
                 peak = vals.max(axis=1) if side == "right" else vals.min(axis=1)
                 ax[0, 0].plot(ti, peak, marker, color=color, ms=6, label=f"{side} impacts")
-        mot = truth["motion"]
-        y = np.asarray(mot["y"])[: sel.sum()]
-        xt = np.asarray(mot["x"])[: sel.sum()]
+        y = truth.motion.y[: sel.sum()]
+        xt = truth.motion.x[: sel.sum()]
         ax[1, 0].plot(t, (xt + b) * 1e3, lw=0.5, color="0.6", label="walls x ± b")
         ax[1, 0].plot(t, (xt - b) * 1e3, lw=0.5, color="0.6")
         ax[1, 0].plot(t, y * 1e3, ":", lw=1.0, color="C3", label="ball y (truth)")
         ax[0, 0].legend(loc="upper right", fontsize=7)
-        regime = (truth.get("regime") or {}).get("label")
+        regime = truth.label
         fig.suptitle(f"{rec.name}: b = {rec.meta.b * 1e3:g} mm"
                      + (f", regime {regime}" if regime else ""), fontsize=10)
     ax[1, 0].set_ylabel("displacement (mm)")

@@ -35,6 +35,7 @@ from .errors import InputError
 from .params import G_ACCEL
 from .recording import PAPER_SENSITIVITY, Metadata, Recording
 from .simulation import SimulationResult
+from .truth import GroundTruth, TrueImpacts, TrueMotion
 
 __all__ = ["SensorConfig", "record", "pulse_kernel", "ANTI_ALIAS_KINDS"]
 
@@ -317,7 +318,7 @@ def pulse_kernel(dt_samples: np.ndarray, sample_rate: float, cutoff: float, tau:
 
 
 def record(result: SimulationResult, sensors: SensorConfig | None = None, seed: int = 0,
-           units: str = "SI", name: str = "simulated") -> tuple[Recording, dict]:
+           units: str = "SI", name: str = "simulated") -> tuple[Recording, GroundTruth]:
     """Turn a simulation into a recording plus its ground truth.
 
     Parameters
@@ -338,8 +339,8 @@ def record(result: SimulationResult, sensors: SensorConfig | None = None, seed: 
     Returns
     -------
     recording : Recording
-    truth : dict
-        JSON-ready ground truth (impacts, sticking, ball motion, effects, parameters).
+    truth : GroundTruth
+        Ground truth (impacts, sticking, ball motion, effects, parameters; no regime).
 
     Notes
     -----
@@ -618,26 +619,13 @@ def _sheet_response(result, st, imp, dv, t_rec, f_s, zeta):
     return q
 
 
-def _truth(result, st, imp, dv, t_rec, sensors, seed) -> dict:
-    recs = imp.to_records(t_offset=result.settle)
-    for r, d in zip(recs, dv):
-        r["dv"] = float(d)
-    return {
-        "version": 1,
-        "params": result.params.to_dict(),
-        "effects": result.effects.to_dict(),
-        "b_true": result.b,
-        "settle": result.settle,
-        "duration": result.duration,
-        "seed": seed,
-        "sensors": sensors.to_dict(),
-        "status": result.status,
-        "message": result.message,
-        "impacts": recs,
-        "sticking": [{"t_start": a, "t_end": b, "where": w}
-                     for a, b, w in result.record_sticking()],
-        "motion": {"t0": 0.0, "dt": float(t_rec[1] - t_rec[0]),
-                   "x": st["x"].tolist(), "xd": st["xd"].tolist(),
-                   "y": st["y"].tolist(), "yd": st["yd"].tolist()},
-        "regime": None,
-    }
+def _truth(result, st, imp, dv, t_rec, sensors, seed) -> GroundTruth:
+    contact = getattr(result, "contact", None)
+    return GroundTruth(
+        params=result.params, effects=result.effects, b_true=result.b, settle=result.settle,
+        duration=result.duration, seed=seed, sensors=sensors.to_dict(),
+        impacts=TrueImpacts.from_table(imp, t_offset=result.settle, dv=dv),
+        motion=TrueMotion(t0=0.0, dt=float(t_rec[1] - t_rec[0]), x=st["x"], xd=st["xd"],
+                          y=st["y"], yd=st["yd"]),
+        sticking=result.record_sticking(), status=result.status, message=result.message,
+        contact=None if contact is None else contact.to_dict())

@@ -237,29 +237,27 @@ def _run_point(task: tuple[SweepSpec, Callable | None, int]) -> dict:
     # importing vidiscover.analysis registers the regime features too, so every
     # backend computes the same feature set
     from .analysis import analyze
-    from .regimes.labels import label_simulation
-    from .sensors import SensorConfig, record
-    from .simulation import simulate
+    from .workflows import simulate_to_memory
 
     spec, classify, index = task
     value = spec.values[index]
     params, effects, noise = spec.configure(value)
     seed = spec.point_seed(index)
-    result = simulate(params, effects, settle=spec.settle, duration=spec.duration)
-    sensors = SensorConfig().scaled_noise(noise)
-    rec, _ = record(result, sensors, seed=seed, name=f"{spec.param}={value:g}")
-    truth = label_simulation(result, sensors.sample_rate)
+    rec, truth, result = simulate_to_memory(params, effects, seed=seed, settle=spec.settle,
+                                            duration=spec.duration, noise=noise,
+                                            name=f"{spec.param}={value:g}")
+    regime = truth.regime
     ana = analyze(rec, mu=effects.mu, threshold=spec.threshold,
                   n_boot=int(spec.n_boot), seed=seed)
     t = ana.detection.t
     right, left = ana.restitution.right, ana.restitution.left
     row = {
         "index": index, "param": spec.param, "value": value, "seed": seed,
-        "label": truth.label,
+        "label": regime["label"],
         "label_pred": _label_of(classify(ana)) if classify is not None else None,
-        "n_impacts_true": int(result.record_impacts().n), "ipc_true": truth.ipc,
-        "phi_true": truth.phi, "periodic_true": bool(truth.periodic),
-        "period_true": -1 if truth.period is None else int(truth.period),
+        "n_impacts_true": truth.impacts.n, "ipc_true": regime["ipc"],
+        "phi_true": regime["phi"], "periodic_true": bool(regime["periodic"]),
+        "period_true": -1 if regime["period"] is None else int(regime["period"]),
         "r_rms_right": right.rms, "r_rms_left": left.rms,
         "r_n_right": int(right.n), "r_n_left": int(left.n),
         "sim_status": int(result.status),

@@ -32,7 +32,7 @@ def _write(ctx, b_mm, settle=20.0, **kw):
     path = ctx["dir"] / f"rec_{b_mm:g}mm.csv"
     write_recording(rec, path, truth=truth)
     ctx.setdefault("files", []).append(path)
-    ctx.setdefault("truth", {})[str(path)] = truth["regime"]["label"]
+    ctx.setdefault("truth", {})[str(path)] = truth.label
 
 
 def _invoke(ctx, args):

@@ -52,19 +52,19 @@ def recording_columns(ctx):
 
 @then("its ground truth lists impacts on both walls")
 def both_walls(ctx):
-    assert {i["side"] for i in ctx["truth"]["impacts"]} == {"right", "left"}
+    assert set(ctx["truth"].impacts.side) == {"right", "left"}
 
 
 @then("the ground truth names a regime label")
 def regime_label(ctx):
     from vidiscover.regimes import LABELS
 
-    assert ctx["truth"]["regime"]["label"] in LABELS
+    assert ctx["truth"].label in LABELS
 
 
 @then(parsers.parse('the ground truth records the effect "{name}"'))
 def records_effect(ctx, name):
-    assert name in ctx["truth"]["effects"]
+    assert name in ctx["truth"].effects
 
 
 @then("momentum is conserved at every impact")
@@ -84,7 +84,7 @@ def completes(ctx):
 
 @then("the ground truth reports sticking phases")
 def sticking(ctx):
-    assert len(ctx["truth"]["sticking"]) > 0
+    assert len(ctx["truth"].sticking) > 0
 
 
 @when(parsers.parse('I run "vidiscover {args}"'), target_fixture="cli")

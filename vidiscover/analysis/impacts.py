@@ -378,7 +378,7 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse: PulseModel | None = No
     >>> from vidiscover import preset, simulate, record
     >>> rec, truth = record(simulate(preset("paper", b=0.009), settle=2.0, duration=0.5))
     >>> det = detect_impacts(rec)
-    >>> det.n == len(truth["impacts"]) - sum(abs(i["dv"]) < 1e-4 for i in truth["impacts"])
+    >>> det.n == truth.impacts.n - int((abs(truth.impacts.dv) < 1e-4).sum())
     True
     """
     pulse = pulse or PulseModel()

@@ -37,6 +37,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..truth import GroundTruth
+
 __all__ = ["DETECTABLE_SNR", "RESOLUTION", "detectable", "detectable_truth",
            "match_impacts", "detection_scores", "DetectionScores"]
 
@@ -89,13 +91,10 @@ def detectable(t: np.ndarray, dv: np.ndarray, a_noise: float, sample_rate: float
     return ok
 
 
-def detectable_truth(truth: dict) -> np.ndarray:
-    """:func:`detectable` applied to a ``truth`` dict from :func:`vidiscover.record`."""
-    imps = truth["impacts"]
-    sensors = truth.get("sensors", {})
-    t = np.array([i["t"] for i in imps], dtype=float)
-    dv = np.array([i["dv"] for i in imps], dtype=float)
-    return detectable(t, dv, float(sensors.get("a_noise", 0.05)),
+def detectable_truth(truth: GroundTruth) -> np.ndarray:
+    """:func:`detectable` applied to the true impacts of a :class:`GroundTruth`."""
+    sensors = truth.sensors
+    return detectable(truth.impacts.t, truth.impacts.dv, float(sensors.get("a_noise", 0.05)),
                       float(sensors.get("sample_rate", 6400.0)),
                       float(sensors.get("cutoff", 0.45)))
 
@@ -178,7 +177,7 @@ class DetectionScores:
     i_true: np.ndarray
 
 
-def detection_scores(t_est: np.ndarray, side_est: np.ndarray, truth: dict,
+def detection_scores(t_est: np.ndarray, side_est: np.ndarray, truth: GroundTruth,
                      tol: float = 0.5e-3) -> DetectionScores:
     """Precision, recall (on detectable impacts), timing and side accuracy.
 
@@ -190,8 +189,8 @@ def detection_scores(t_est: np.ndarray, side_est: np.ndarray, truth: dict,
     ----------
     t_est, side_est : ndarray
         Detected times (s) and sides ("right"/"left").
-    truth : dict
-        Ground truth from :func:`vidiscover.record`.
+    truth : GroundTruth
+        Ground truth of the recording (:func:`vidiscover.record`).
     tol : float
         Matching tolerance (s).
 
@@ -199,11 +198,9 @@ def detection_scores(t_est: np.ndarray, side_est: np.ndarray, truth: dict,
     -------
     DetectionScores
     """
-    imps = truth["impacts"]
     t_est = np.asarray(t_est, dtype=float)
     side_est = np.asarray(side_est).astype(str)
-    t_true = np.array([i["t"] for i in imps], dtype=float)
-    s_true = np.array([i["side"] for i in imps]).astype(str)
+    t_true, s_true = truth.impacts.t, truth.impacts.side
     det = detectable_truth(truth)
     # a match needs the same wall: a pulse of the wrong sign is a false alarm
     pairs_e, pairs_t = [], []

@@ -151,7 +151,7 @@ def run_case(case: Case) -> dict:
     return {
         "effect": case.effect, "spec": list(case.spec), "b": case.b,
         "magnitude": case.magnitude, "kind": case.kind,
-        "regime": truth["regime"]["label"], "expected": case.expected,
+        "regime": truth.label, "expected": case.expected,
         "predicted": rep.verdict, "correct": rep.verdict == case.expected,
         "gap_before": d["gap_before"], "gap_after": d["gap_after"],
         "shrink": (d["gap_before"] - d["gap_after"]) / d["gap_before"]

@@ -101,12 +101,13 @@ def _simulate(model: Model, effects: Effects, r: float, ball_speed: float | None
 
 
 def _record(model: Model, result, noise_seed: int) -> Signature:
-    from ..sensors import SensorConfig, record
+    from ..sensors import SensorConfig
+    from ..workflows import record_simulation
 
     xn, an, en = model.noise
     cfg = SensorConfig(sample_rate=model.sample_rate, x_noise=xn, a_noise=an, xe_noise=en)
-    rec, _ = record(result, cfg, seed=1000 + noise_seed)
-    return measure(rec)
+    return measure(record_simulation(result, cfg, seed=1000 + noise_seed,
+                                     label=False).recording)
 
 
 def simulate_signature(model: Model, effects: Effects, r: float | None = None, *,
@@ -396,13 +397,7 @@ def _fit_resonance(model: Model, base: Effects):
     so = _SensorObjective(model, base, model.params.r)
     if so.own_gap("sensors.residual") < _SENSOR_QUIET:
         return {"f_s": 2000.0, "zeta_s": 0.7}, 2, model.params.r, 1
-    nominal = so.result
-    from ..sensors import SensorConfig, record
-
-    xn, an, en = model.noise
-    cfg = SensorConfig(sample_rate=model.sample_rate, x_noise=xn, a_noise=an, xe_noise=en)
-    rec, _ = record(nominal, cfg, seed=1000)
-    ref = measure(rec).residual_psd
+    ref = _record(model, so.result, 0).residual_psd
     f, psd = model.real.residual_psd
     ratio = psd / np.maximum(ref[1], 1e-300)
     band = (f >= 25.0) & (f <= min(2500.0, 0.45 * model.sample_rate))

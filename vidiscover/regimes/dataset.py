@@ -215,16 +215,13 @@ def simulate_case(case: Case) -> dict:
     """
     from ..analysis import analyze
     from ..analysis.returnmap import FEATURES, compute_features
-    from ..sensors import SensorConfig, record
-    from ..simulation import simulate
-    from .labels import label_simulation
+    from ..workflows import simulate_to_memory
 
     row = {f"param:{k}": v for k, v in case.to_dict().items()}
     try:
-        res = simulate(case.params(), case.effects(), settle=case.settle,
-                       duration=case.duration)
-        rec, _ = record(res, SensorConfig().scaled_noise(case.noise), seed=case.seed)
-        truth = label_simulation(res, rec.sample_rate)
+        rec, truth, res = simulate_to_memory(case.params(), case.effects(), seed=case.seed,
+                                             settle=case.settle, duration=case.duration,
+                                             noise=case.noise)
         out = analyze(rec, n_boot=_N_BOOT, seed=case.seed)
     except InputError as err:
         row.update(label=None, status=f"error: {err}")
@@ -234,7 +231,7 @@ def simulate_case(case: Case) -> dict:
     if missing:
         feats.update(compute_features(feature_context(out), missing))
     row.update(label=truth.label, status="ok" if res.status == 0 else f"sim: {res.message}")
-    row.update({f"truth:{k}": v for k, v in truth.to_dict().items() if k != "label"})
+    row.update({f"truth:{k}": v for k, v in truth.regime.items() if k != "label"})
     row.update({f"feature:{k}": v for k, v in feats.items()})
     return row
 

@@ -22,7 +22,8 @@ from collections.abc import Callable
 import numpy as np
 
 from ..plotting import figure
-from .truth import matched_true_r, truth_impacts
+from ..truth import GroundTruth
+from .truth import matched_true_r
 
 __all__ = ["FIGURES", "FigureSpec", "register_figure", "render_all"]
 
@@ -55,7 +56,7 @@ class FigureSpec:
         self.paper = paper
         self.caption = caption
 
-    def __call__(self, result, truth: dict | None = None, **kw):
+    def __call__(self, result, truth: GroundTruth | None = None, **kw):
         """Draw the figure: ``func(result, truth, **kw)``."""
         return self.func(result, truth, **kw)
 
@@ -89,13 +90,13 @@ def register_figure(name: str, paper: str, caption: str):
     return deco
 
 
-def render_all(result, truth: dict | None = None, names=None) -> dict:
+def render_all(result, truth: GroundTruth | None = None, names=None) -> dict:
     """Draw every registered figure (or ``names``).
 
     Parameters
     ----------
     result : AnalysisResult
-    truth : dict, optional
+    truth : GroundTruth, optional
         Ground truth to overlay.
     names : iterable of str, optional
         Subset of :data:`FIGURES` (default all).
@@ -127,13 +128,17 @@ def _impacts_in(result, t0: float, t1: float) -> np.ndarray:
     return (t >= t0) & (t <= t1)
 
 
-def _truth_motion(truth: dict | None, key: str, t0: float, t1: float):
+def _true_impacts(truth: GroundTruth | None):
+    """The true impacts, or None without truth or impacts."""
+    return truth.impacts if truth is not None and truth.impacts.n else None
+
+
+def _truth_motion(truth: GroundTruth | None, key: str, t0: float, t1: float):
     """(t, values) of a truth motion channel inside [t0, t1], or None."""
-    if not truth or "motion" not in truth or key not in truth["motion"]:
+    if truth is None:
         return None
-    mot = truth["motion"]
-    vals = np.asarray(mot[key], dtype=float)
-    t = float(mot.get("t0", 0.0)) + float(mot["dt"]) * np.arange(vals.size)
+    vals = getattr(truth.motion, key)
+    t = truth.motion.t
     sel = (t >= t0) & (t <= t1)
     return t[sel], vals[sel]
 
@@ -163,13 +168,13 @@ def _sel(t: np.ndarray, t0: float, t1: float) -> np.ndarray:
 @register_figure("acceleration", "Figs. 4, 8, 10",
                  "LO acceleration with the detected impacts (crosses at the pulse "
                  "extreme; red: right wall, blue: left wall).")
-def fig_acceleration(result, truth: dict | None = None, *, window: float | None = None):
+def fig_acceleration(result, truth: GroundTruth | None = None, *, window: float | None = None):
     """LO acceleration over the record with the detected impacts marked (Figs. 4, 8, 10).
 
     Parameters
     ----------
     result : AnalysisResult
-    truth : dict, optional
+    truth : GroundTruth, optional
         True impact times are drawn as grey ticks along the top of the axes.
     window : float, optional
         Seconds shown from the start (default the whole record).
@@ -204,9 +209,9 @@ def fig_acceleration(result, truth: dict | None = None, *, window: float | None 
             peak = vals.max(axis=1) if side == "right" else vals.min(axis=1)
             ax.plot(det.t[m], peak, "x", color=COLOURS[side], ms=5, mew=1.2,
                     label=f"{side} impacts ({int(m.sum())})")
-    ti = truth_impacts(truth)
+    ti = _true_impacts(truth)
     if ti is not None:
-        tt = ti[0][_sel(ti[0], t0, t1)]
+        tt = ti.t[_sel(ti.t, t0, t1)]
         if tt.size:
             ax.plot(tt, np.full(tt.size, 0.97), "|", color=TRUTH, ms=6,
                     transform=ax.get_xaxis_transform(), label="true impacts")
@@ -221,13 +226,13 @@ def fig_acceleration(result, truth: dict | None = None, *, window: float | None 
 @register_figure("return_map", "Fig. 5",
                  "First return map of impact time differences (Δt_i, Δt_i+1): a few "
                  "points mean periodic impacts, a line or a cloud irregular ones.")
-def fig_return_map(result, truth: dict | None = None):
+def fig_return_map(result, truth: GroundTruth | None = None):
     """First return map of impact time differences (Fig. 5).
 
     Parameters
     ----------
     result : AnalysisResult
-    truth : dict, optional
+    truth : GroundTruth, optional
         The return map of the true impact times is drawn in grey.
 
     Returns
@@ -238,9 +243,9 @@ def fig_return_map(result, truth: dict | None = None):
     ax = axes[0, 0]
     rm = result.returnmap
     T = rm.period
-    ti = truth_impacts(truth)
-    if ti is not None and ti[0].size > 2:
-        dt = np.diff(np.sort(ti[0]))
+    ti = _true_impacts(truth)
+    if ti is not None and ti.n > 2:
+        dt = np.diff(np.sort(ti.t))
         ax.plot(dt[:-1] / T, dt[1:] / T, ".", color=TRUTH, ms=7, alpha=0.5,
                 label="truth")
     for side in ("right", "left"):
@@ -266,14 +271,14 @@ def fig_return_map(result, truth: dict | None = None):
 
 @register_figure("displacement", "Fig. 6",
                  "LO displacement (laser) with the impact moments as circles.")
-def fig_displacement(result, truth: dict | None = None, *,
+def fig_displacement(result, truth: GroundTruth | None = None, *,
                      window: float | None = DETAIL_WINDOW):
     """Measured LO displacement with the impact moments (Fig. 6).
 
     Parameters
     ----------
     result : AnalysisResult
-    truth : dict, optional
+    truth : GroundTruth, optional
         The true LO displacement is drawn in grey.
     window : float, optional
         Seconds shown from the start (None: whole record).
@@ -311,14 +316,14 @@ def fig_displacement(result, truth: dict | None = None, *,
 @register_figure("ball_displacement", "Figs. 7, 9, 11",
                  "Reconstructed ball displacement (dotted) between the walls x ± b; "
                  "circles: ball position at the impacts.")
-def fig_ball_displacement(result, truth: dict | None = None, *,
+def fig_ball_displacement(result, truth: GroundTruth | None = None, *,
                           window: float | None = DETAIL_WINDOW):
     """Reconstructed ball displacement between the walls ``x ± b`` (Figs. 7, 9, 11).
 
     Parameters
     ----------
     result : AnalysisResult
-    truth : dict, optional
+    truth : GroundTruth, optional
         The true ball displacement is drawn in grey.
     window : float, optional
         Seconds shown from the start (None: whole record).
@@ -359,14 +364,14 @@ def fig_ball_displacement(result, truth: dict | None = None, *,
 
 @register_figure("ball_velocity", "Fig. 12",
                  "Reconstructed ball velocity; circles: impact moments.")
-def fig_ball_velocity(result, truth: dict | None = None, *,
+def fig_ball_velocity(result, truth: GroundTruth | None = None, *,
                       window: float | None = DETAIL_WINDOW):
     """Reconstructed ball velocity (Fig. 12).
 
     Parameters
     ----------
     result : AnalysisResult
-    truth : dict, optional
+    truth : GroundTruth, optional
         The true ball velocity is drawn in grey.
     window : float, optional
         Seconds shown from the start (None: whole record).
@@ -407,14 +412,14 @@ def fig_ball_velocity(result, truth: dict | None = None, *,
 @register_figure("lo_velocity", "Fig. 13",
                  "LO velocity from the displacement (non-smooth, differentiated laser) "
                  "and from the acceleration (smooth, integrated, with jumps at impacts).")
-def fig_lo_velocity(result, truth: dict | None = None, *,
+def fig_lo_velocity(result, truth: GroundTruth | None = None, *,
                     window: float | None = DETAIL_WINDOW):
     """LO velocity estimated from displacement and from acceleration (Fig. 13).
 
     Parameters
     ----------
     result : AnalysisResult
-    truth : dict, optional
+    truth : GroundTruth, optional
         The true LO velocity is drawn in grey.
     window : float, optional
         Seconds shown from the start (None: whole record).
@@ -445,14 +450,14 @@ def fig_lo_velocity(result, truth: dict | None = None, *,
 @register_figure("impact_velocities", "Fig. 14",
                  "LO velocity before (x'−, triangles) and after (x'+, crosses) each impact; "
                  "right: zoom on the strongest impact of the window.")
-def fig_impact_velocities(result, truth: dict | None = None, *,
+def fig_impact_velocities(result, truth: GroundTruth | None = None, *,
                           window: float | None = DETAIL_WINDOW / 2, zoom: float = 2e-3):
     """LO velocity before and after each impact (Fig. 14), with a zoom on one impact.
 
     Parameters
     ----------
     result : AnalysisResult
-    truth : dict, optional
+    truth : GroundTruth, optional
         True pre/post-impact LO velocities are drawn as grey dots.
     window : float, optional
         Seconds shown from the start (None: whole record).
@@ -469,9 +474,7 @@ def fig_impact_velocities(result, truth: dict | None = None, *,
     t0, t1 = _span(result, window)
     inside = _impacts_in(result, t0, t1)
     cols = rc.impact_columns
-    imps = []
-    if truth and truth.get("impacts"):
-        imps = [i for i in truth["impacts"] if t0 <= i["t"] <= t1]
+    imps = truth.impacts.window(t0, t1) if truth is not None else None
     ranges = [(t0, t1)]
     if inside.any():
         k = np.flatnonzero(inside)[np.argmax(np.abs(det.dv[inside]))]
@@ -479,11 +482,9 @@ def fig_impact_velocities(result, truth: dict | None = None, *,
     for ax, (a, b) in zip(axes[0], ranges, strict=False):
         s = _sel(rc.t, a, b)
         ax.plot(rc.t[s], rc.v[s], lw=0.8, color="0.3", label="LO velocity")
-        sel_t = [i for i in imps if a <= i["t"] <= b]
-        if sel_t:
-            tt = np.array([i["t"] for i in sel_t])
-            ax.plot(np.r_[tt, tt], np.r_[[i["v_minus"] for i in sel_t],
-                                         [i["v_plus"] for i in sel_t]],
+        sel_t = imps.window(a, b) if imps is not None else None
+        if sel_t is not None and sel_t.n:
+            ax.plot(np.r_[sel_t.t, sel_t.t], np.r_[sel_t.v_minus, sel_t.v_plus],
                     ".", color="0.6", ms=9, label="truth")
         for side in ("right", "left"):
             m = inside & (det.side == side) & (det.t >= a) & (det.t <= b)
@@ -508,13 +509,13 @@ def fig_impact_velocities(result, truth: dict | None = None, *,
 @register_figure("restitution", "Figs. 16-18",
                  "Restitution coefficient of every impact (eq. 9; circles: right wall, "
                  "crosses: left wall); dotted lines: RMS per wall.")
-def fig_restitution(result, truth: dict | None = None):
+def fig_restitution(result, truth: GroundTruth | None = None):
     """Restitution coefficient per impact and wall with RMS lines (Figs. 16-18).
 
     Parameters
     ----------
     result : AnalysisResult
-    truth : dict, optional
+    truth : GroundTruth, optional
         The true r of the matched impacts is drawn as grey dots and the true RMS as
         dashed grey lines.
 
@@ -530,7 +531,7 @@ def fig_restitution(result, truth: dict | None = None):
     used = np.asarray(c["used"], dtype=bool)
     side = np.asarray(c["side"])
     r_true = matched_true_r(result, truth)
-    ti = truth_impacts(truth)
+    ti = _true_impacts(truth)
     for sd in ("right", "left"):
         m = used & (side == sd)
         col = COLOURS[sd]

@@ -10,36 +10,18 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["truth_impacts", "matched_true_r", "compare_truth"]
+from ..truth import GroundTruth
+
+__all__ = ["matched_true_r", "compare_truth"]
 
 
-def truth_impacts(truth: dict | None):
-    """True impacts as arrays ``(t, side, r)``, or None without truth or impacts.
-
-    Parameters
-    ----------
-    truth : dict or None
-        Ground truth of a simulated recording.
-
-    Returns
-    -------
-    tuple of ndarray or None
-    """
-    if not truth or not truth.get("impacts"):
-        return None
-    imps = truth["impacts"]
-    return (np.array([i["t"] for i in imps], dtype=float),
-            np.array([str(i["side"]) for i in imps]),
-            np.array([i.get("r", np.nan) for i in imps], dtype=float))
-
-
-def _scores(result, truth: dict):
+def _scores(result, truth: GroundTruth):
     from ..analysis import detection_scores
 
     return detection_scores(result.detection.t, result.detection.side, truth)
 
 
-def matched_true_r(result, truth: dict | None) -> np.ndarray:
+def matched_true_r(result, truth: GroundTruth | None) -> np.ndarray:
     """True r of every detected impact (NaN where it matches no true impact).
 
     Detections are matched to true impacts of the same wall
@@ -48,7 +30,7 @@ def matched_true_r(result, truth: dict | None) -> np.ndarray:
     Parameters
     ----------
     result : AnalysisResult
-    truth : dict or None
+    truth : GroundTruth or None
 
     Returns
     -------
@@ -56,20 +38,19 @@ def matched_true_r(result, truth: dict | None) -> np.ndarray:
         One value per detected impact, in detection order.
     """
     out = np.full(result.detection.n, np.nan)
-    ti = truth_impacts(truth)
-    if ti is not None and out.size:
+    if truth is not None and truth.impacts.n and out.size:
         sc = _scores(result, truth)
-        out[sc.i_est] = ti[2][sc.i_true]
+        out[sc.i_est] = truth.impacts.r[sc.i_true]
     return out
 
 
-def compare_truth(result, truth: dict) -> dict:
+def compare_truth(result, truth: GroundTruth) -> dict:
     """Estimates against truth: detection scores, per-wall r RMS, regime.
 
     Parameters
     ----------
     result : AnalysisResult
-    truth : dict
+    truth : GroundTruth
         Ground truth of the same recording.
 
     Returns
@@ -91,7 +72,7 @@ def compare_truth(result, truth: dict) -> dict:
         rms = float(np.sqrt(np.mean(r_true[m] ** 2))) if m.any() else float("nan")
         rest[sd] = {"rms": rms, "n": int(m.sum()),
                     "rms_error": float(result.restitution.wall(sd).rms - rms)}
-    if truth.get("impacts"):
+    if truth.impacts.n:
         sc = _scores(result, truth)
         impacts = {"n": sc.n_true, "detectable": sc.n_detectable, "matched": sc.n_matched,
                    "precision": sc.precision, "recall": sc.recall,
@@ -100,6 +81,5 @@ def compare_truth(result, truth: dict) -> dict:
         impacts = {"n": 0, "detectable": 0, "matched": 0,
                    "precision": 1.0 if result.detection.n == 0 else 0.0, "recall": 1.0,
                    "timing_median": float("nan")}
-    regime = truth.get("regime") or {}
-    return {"impacts": impacts, "restitution": rest, "regime": {"label": regime.get("label")},
-            "effects": truth.get("effects"), "b_true": truth.get("b_true")}
+    return {"impacts": impacts, "restitution": rest, "regime": {"label": truth.label},
+            "effects": truth.effects.to_dict(), "b_true": truth.b_true}

@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from .._atomic import atomic_directory, to_jsonable, write_group
+from ..truth import GroundTruth
 from .figures import FIGURES
 from .html import render_index, render_report
 from .truth import compare_truth
@@ -37,14 +38,14 @@ def _mu_rows(result) -> list[dict] | None:
     return to_jsonable(result.mu_table().to_dict(orient="records"))
 
 
-def analysis_summary(result, truth: dict | None = None, *, mu_table: bool = True,
+def analysis_summary(result, truth: GroundTruth | None = None, *, mu_table: bool = True,
                      regime: Mapping | None = None) -> dict:
     """The content of ``summary.json``.
 
     Parameters
     ----------
     result : AnalysisResult
-    truth : dict, optional
+    truth : GroundTruth, optional
         Ground truth of a simulated recording; adds the key ``truth``
         (:func:`vidiscover.report.truth.compare_truth`).
     mu_table : bool
@@ -107,7 +108,7 @@ def _png(fig, dpi: int) -> bytes:
 
 
 def write_analysis(result, out_dir: str | os.PathLike, *, figures: bool = True,
-                   truth: dict | None = None, mu_table: bool = True,
+                   truth: GroundTruth | None = None, mu_table: bool = True,
                    regime: Mapping | None = None, dpi: int = 90) -> dict:
     """Write one analysis with its figures and self-contained report.
 
@@ -123,7 +124,7 @@ def write_analysis(result, out_dir: str | os.PathLike, *, figures: bool = True,
     figures : bool
         Render every registered figure (:data:`vidiscover.report.figures.FIGURES`)
         into ``figures/NAME.png`` and the report.
-    truth : dict, optional
+    truth : GroundTruth, optional
         Ground truth of a simulated recording, overlaid in the figures and compared
         in the summary and report.
     mu_table : bool
