@@ -20,19 +20,21 @@ Speed design
   (:class:`~.engine._Loop`, its event grid and bracketed Newton search for
   ``|z| = b``) is reused unchanged.
 * Kelvin-Voigt contacts are linear: closed form by the eigen-decomposition of the
-  4x4 system matrix (once per wall) plus the particular response to the harmonic
-  base forcing and the constant forces; the exit (force = 0) is found on a grid of
-  1/32 of the contact half-period, refined by bracketed Newton.
-* Hunt-Crossley contacts, and every contact with friction (``mu > 0``), are
-  integrated with ``solve_ivp`` (DOP853, ``SimOptions.contact_rtol``, terminal
-  events, bounded step, dense output kept for :meth:`CompliantResult.evaluate`).
+  4x4 system matrix (once per wall and sign of friction) plus the particular
+  response to the harmonic base forcing and the constant forces; the exit
+  (force = 0) is found on a grid of 1/32 of the contact half-period, refined by
+  bracketed Newton.
+* Hunt-Crossley contacts are integrated with ``solve_ivp`` (DOP853,
+  ``SimOptions.contact_rtol``, terminal events, bounded step, dense output kept for
+  :meth:`CompliantResult.evaluate`): ~10 ms per contact, seconds per 25 s.
 * Friction is regularised, ``tanh(z'/v_s)`` with ``v_s`` = ``SimOptions.friction_speed``
   (1 mm/s default). While ``|z'| >= 20 v_s`` the tanh is +/-1 in double precision:
-  the flight is the exact engine's closed form with Coulomb friction of fixed sign;
-  inside the band ``|z'| < 20 v_s`` (reversals, the ball held by friction) it is
-  integrated (there friction is a stiff viscous law of rate ``mu g / v_s``, 1.5e3
-  1/s at mu = 0.15). Cost on the paper rig, 25 s: about 4x the frictionless KV
-  case for the flights, plus ~10 ms per integrated contact (seconds in all).
+  flights are the exact engine's closed form with Coulomb friction of fixed sign,
+  KV contacts the closed form with that constant force; inside the band
+  ``|z'| < 20 v_s`` (every reversal, in contacts too, and the ball held by
+  friction) the flow is integrated (friction is a stiff viscous law there, rate
+  ``mu g / v_s``, 1.5e3 1/s at mu = 0.15). That costs one ``solve_ivp`` call per
+  reversal, a few ms each: seconds per 25 s instead of a fraction of a second.
 
 A contact episode still open at the end of the span is not in the impact table.
 The number of phases is bounded (``max_events``), so a ball resting on a wall or
