@@ -403,7 +403,7 @@ def record(result: SimulationResult, sensors: SensorConfig | None = None, seed: 
                                  fx.value("sensor_resonance", "zeta_s"))
         xe = st["xe"]
     else:
-        x, a, xe = _oversampled_chain(result, sensors, n)
+        x, a, xe = _oversampled_chain(result, sensors, n, st)
     a += rng.normal(0.0, sensors.a_noise, n) if sensors.a_noise > 0 else 0.0
     x += rng.normal(0.0, sensors.x_noise, n) if sensors.x_noise > 0 else 0.0
     xe = xe + (rng.normal(0.0, sensors.xe_noise, n) if sensors.xe_noise > 0 else 0.0)
@@ -539,13 +539,100 @@ def _odd_pad(u: np.ndarray, before: int, after: int) -> np.ndarray:
     return np.concatenate(parts, axis=-1) if len(parts) > 1 else u
 
 
-#: Os samples evaluated per call of ``result.evaluate`` (bounds its temporaries).
-_CHUNK = 1 << 17
+#: Mismatch at an interval's midpoint beyond which it is evaluated at every oversampled
+#: instant instead of interpolated: LO displacement (m), velocity (m/s), acceleration.
+_SMOOTH_TOL = (1e-11, 1e-9, 1e-5)
+
+
+def _quintic_basis(s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Quintic Hermite basis at ``s`` in [0, 1]: value, 1st and 2nd derivative rows.
+
+    Columns multiply ``p0, p0', p0'', p1, p1', p1''`` (derivatives in units of s).
+    """
+    c = np.array([[1, 0, 0, -10, 15, -6], [0, 1, 0, -6, 8, -3], [0, 0, .5, -1.5, 1.5, -.5],
+                  [0, 0, 0, 10, -15, 6], [0, 0, 0, -4, 7, -3], [0, 0, 0, .5, -1, .5]])
+    k = np.arange(6)
+    pw = s[:, None] ** k
+    d1 = np.where(k > 0, k * s[:, None] ** np.maximum(k - 1, 0), 0.0)
+    d2 = np.where(k > 1, k * (k - 1) * s[:, None] ** np.maximum(k - 2, 0), 0.0)
+    return pw @ c.T, d1 @ c.T, d2 @ c.T
+
+
+def _combine(coef: np.ndarray, basis: np.ndarray) -> np.ndarray:
+    """``(coef @ basis.T).ravel()`` as broadcast products.
+
+    With an inner dimension of 3-6 this beats a BLAS call several times over.
+    """
+    out = coef[:, :1] * basis[:, 0]
+    for j in range(1, coef.shape[1]):
+        out += coef[:, j:j + 1] * basis[:, j]
+    return out.ravel()
+
+
+def _os_signals(result, st, fs: float, n: int, big: int, n_pre: int):
+    """Displacements at the oversampled instants and the LO velocity at the bin edges.
+
+    The instants are ``p_i = settle + (i / big - n_pre) / fs``, ``i = 0 .. (n_pre + n -
+    1) big``; the record samples are every ``big``-th. The result is evaluated at the
+    sample-rate knots (``st`` holds the record's) and at the midpoints between them.
+    Between knots the motion is the quintic Hermite interpolant of x, x', x''
+    (xe: the quadratic through knots and midpoint); an interval whose midpoint the
+    interpolant misses by more than :data:`_SMOOTH_TOL` (an impact, a contact, a
+    stick/slip or friction switch) is evaluated at all its instants instead.
+
+    Returns
+    -------
+    edges : ndarray
+        Bin edges ``p_i -/+ dt / 2`` (one more than the instants).
+    x, v_edges, xe : ndarray
+        LO displacement, LO velocity at the edges, base displacement.
+    """
+    dt = 1.0 / (fs * big)
+    h = 1.0 / fs
+    settle = result.settle
+    knots = settle + np.arange(-n_pre, n) / fs
+    if n_pre:
+        pre = result.evaluate(knots[:n_pre])
+        kx, kv, ka, kxe = (np.concatenate([pre[c], st[c]]) for c in ("x", "xd", "xdd", "xe"))
+    else:
+        kx, kv, ka, kxe = st["x"], st["xd"], st["xdd"], st["xe"]
+    mid = result.evaluate(knots[:-1] + 0.5 * h)
+    coef = np.stack([kx[:-1], h * kv[:-1], h * h * ka[:-1], kx[1:], h * kv[1:],
+                     h * h * ka[1:]], axis=1)
+    b0, b1, b2 = _quintic_basis(np.array([0.5]))
+    bad = (np.abs(coef @ b0[0] - mid["x"]) > _SMOOTH_TOL[0]) \
+        | (np.abs(coef @ b1[0] / h - mid["xd"]) > _SMOOTH_TOL[1]) \
+        | (np.abs(coef @ b2[0] / (h * h) - mid["xdd"]) > _SMOOTH_TOL[2])
+    m = np.arange(big)
+    bx = _quintic_basis(m / big)[0]
+    bv = _quintic_basis((m + 0.5) / big)[1] / h
+    x = np.empty(knots.size * big - big + 1)
+    v = np.empty(x.size + 1)
+    x[:-1] = _combine(coef, bx)
+    v[1:-1] = _combine(coef, bv)
+    x[-1] = kx[-1]
+    # xe: quadratic through the knots and the midpoint of each interval
+    u = m / big
+    lag = np.stack([(2 * u - 1) * (u - 1), 4 * u * (1 - u), u * (2 * u - 1)])
+    xe = np.empty(x.size)
+    xe[:-1] = _combine(np.stack([kxe[:-1], mid["xe"], kxe[1:]], axis=1), lag.T)
+    xe[-1] = kxe[-1]
+    ends = result.evaluate(np.array([knots[0] - 0.5 * dt, knots[-1] + 0.5 * dt]))["xd"]
+    v[0], v[-1] = ends
+    idx = np.flatnonzero(bad)
+    if idx.size:
+        t_c = (knots[idx][:, None] + m * dt).ravel()
+        exact = result.evaluate(np.concatenate([t_c, t_c + 0.5 * dt]))
+        sel = (idx[:, None] * big + m).ravel()
+        x[sel], xe[sel] = exact["x"][:sel.size], exact["xe"][:sel.size]
+        v[sel + 1] = exact["xd"][sel.size:]
+    edges = knots[0] + (np.arange(v.size) - 0.5) * dt
+    return edges, x, v, xe
 #: Warm-up of the causal filters in e-folds of their slowest pole, and its cap (s).
 _WARM_EFOLDS, _WARM_MAX = 10.0, 0.5
 
 
-def _oversampled_chain(result, cfg: SensorConfig, n: int):
+def _oversampled_chain(result, cfg: SensorConfig, n: int, st: dict):
     """The general acquisition path (see :func:`record`): noise-free x, a, xe."""
     from scipy import signal
 
@@ -570,19 +657,12 @@ def _oversampled_chain(result, cfg: SensorConfig, n: int):
     cascades = [s for s in (pre_a, sheet, aa if causal else None) if s is not None]
     warm = max([_settling_samples(s) for s in cascades] + [0.0]) * _WARM_EFOLDS
     warm = int(min(warm, _WARM_MAX * fs_os))
-    # oversampled instants p_i = settle + (i - i0) dt; evaluation at the bin edges
+    # oversampled instants: n_pre knots (sample intervals) before the record
     last = (n - 1) * big
-    pre = max(min(warm + half, int(result.settle / dt - 0.5)), 0)
-    post = max(min(half, int(result.duration / dt - last - 0.5)), 0)
-    edges = result.settle + (np.arange(pre + last + post + 2) - pre - 0.5) * dt
-    v, x, xe = (np.empty(edges.size) for _ in range(3))
-    for lo in range(0, edges.size, _CHUNK):
-        st = result.evaluate(edges[lo:lo + _CHUNK])
-        v[lo:lo + _CHUNK], x[lo:lo + _CHUNK], xe[lo:lo + _CHUNK] = st["xd"], st["x"], st["xe"]
-    dv = np.diff(v)
-    a_os = dv / dt
-    x_os = 0.5 * (x[:-1] + x[1:]) - dt * dv / 8.0      # x at the bin centres, O(dt^3)
-    xe_os = 0.5 * (xe[:-1] + xe[1:])
+    n_pre = max(min(-(-(warm + half) // big), int(result.settle * fs - 0.5 / big)), 0)
+    pre, post = n_pre * big, 0
+    edges, x_os, v, xe_os = _os_signals(result, st, fs, n, big, n_pre)
+    a_os = np.diff(v) / dt
     if getattr(result, "impulsive", True):
         a_os = _impulse_split(result, a_os, edges, dt, fx.tau)
     if sheet is not None:
