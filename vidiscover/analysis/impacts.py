@@ -46,18 +46,16 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 import pandas as pd
-from scipy.ndimage import correlate1d
-from scipy.signal import savgol_coeffs
 
 from ..errors import InputError
 from ..params import G_ACCEL
-from ..sensors import pulse_kernel
 from ._table import check_columns, empty_columns, to_frame
-from .signals import check_recording, clipped_mask, fill_gaps, robust_std
+from .pulse import PulseModel, PulseResponse, learn_pulse
+from .signals import check_recording, clipped_mask, fill_gaps, robust_std, savgol_smooth
 
 __all__ = ["PulseModel", "ImpactDetection", "detect_impacts", "IMPACT_COLUMNS"]
 
@@ -65,7 +63,6 @@ __all__ = ["PulseModel", "ImpactDetection", "detect_impacts", "IMPACT_COLUMNS"]
 IMPACT_COLUMNS = ("t", "side", "dv", "area", "snr", "peak", "sample", "reliable",
                   "clipped", "dropout", "side_check")
 
-_OVERSAMPLE = 256          # kernel table points per sample
 _GRID_STEP = 0.05          # sub-sample delay grid of the fit (samples)
 _GRID_HALF = 1.5           # the grid spans +/- this many samples around the peak
 _FIRST_ROUND_REL = 0.35    # first round: a peak must reach this share of the local max
@@ -73,139 +70,6 @@ _MAX_CLIP_RUN = 4          # longer clipped runs are a saturated smooth response
 _LOBE = 2                  # samples each side of a pulse centre bridged for the smoother
 _SAME_WALL_MERGE = 1.5     # same-sign pulses closer than this (samples) are one pulse
 _REBASE_SNR = 20.0         # a later-round pulse this strong makes the smooth part be redone
-
-
-@dataclass(frozen=True)
-class PulseModel:
-    """Shape of the accelerometer pulse of one impact (unit area).
-
-    The default is the acquisition model of :mod:`vidiscover.sensors`: a Kaiser
-    windowed sinc low-pass at ``cutoff`` times the sampling rate, linear phase (so
-    the pulse is centred on the impact), optionally convolved with a half-sine of
-    the contact duration ``tau``.
-
-    Parameters
-    ----------
-    cutoff : float
-        Low-pass cut-off as a fraction of the sampling rate, in (0, 0.5).
-    halfwidth : int
-        Kernel half-width (samples).
-    tau : float
-        Contact duration (s), 0 for instantaneous impacts.
-    """
-
-    cutoff: float = 0.45
-    halfwidth: int = 24
-    tau: float = 0.0
-
-    def __post_init__(self) -> None:
-        if not 0 < self.cutoff < 0.5:
-            raise InputError(f"cutoff must be in (0, 0.5) of the sampling rate, "
-                             f"was {self.cutoff!r}")
-        if not (isinstance(self.halfwidth, (int, np.integer)) and 4 <= self.halfwidth <= 256):
-            raise InputError(f"halfwidth must be an integer in [4, 256] samples, "
-                             f"was {self.halfwidth!r}")
-        if not (math.isfinite(self.tau) and self.tau >= 0):
-            raise InputError(f"tau must be >= 0 s, was {self.tau!r}")
-
-    def span(self, fs: float) -> int:
-        """Half-width of the pulse support (samples): kernel plus half the contact."""
-        return int(self.halfwidth) + int(math.ceil(self.tau * fs / 2.0))
-
-    def table(self, fs: float) -> np.ndarray:
-        """Polyphase table of the kernel (1/s).
-
-        Row p, column m holds the kernel at ``m - H + p / P`` samples,
-        ``H = span + 1``, ``P`` phases per sample.
-        """
-        return _kernel_table(float(fs), self.cutoff, int(self.halfwidth), self.tau)
-
-    def kernel(self, offset: np.ndarray, fs: float) -> np.ndarray:
-        """Kernel (1/s) at sample offsets ``offset`` (samples, float) from the centre."""
-        offset = np.asarray(offset, dtype=float)
-        H = self.span(fs) + 1
-        u = np.clip(offset + H, 0.0, 2 * H - 1e-9) * _OVERSAMPLE
-        i = np.floor(u).astype(np.int64)
-        w = u - i
-        flat = _kernel_flat(float(fs), self.cutoff, int(self.halfwidth), self.tau)
-        out = (1 - w) * flat[i] + w * flat[i + 1]
-        return np.where(np.abs(offset) < H, out, 0.0)
-
-    def rows(self, j: np.ndarray, delta: np.ndarray, fs: float) -> np.ndarray:
-        """Kernel at ``j - delta``, an (n, W) array.
-
-        For integer offsets ``j`` (W,), ``|j| <= span + 8``, and per-row delays
-        ``delta`` (n,), ``|delta| <= 3``, by linear interpolation between the
-        phases of :meth:`table`.
-        """
-        T = _kernel_table_padded(float(fs), self.cutoff, int(self.halfwidth), self.tau)
-        u = -np.asarray(delta, dtype=float)
-        fl = np.floor(u)
-        ph = (u - fl) * _OVERSAMPLE
-        pi = ph.astype(np.int64)
-        w = (ph - pi)[:, None]
-        m = j[None, :] + (self.span(fs) + 1 + _TABLE_PAD) + fl.astype(np.int64)[:, None]
-        row = pi[:, None]
-        lo = T[row, m]
-        return lo + w * (T[row + 1, m] - lo)
-
-    def peak(self, fs: float) -> float:
-        """Kernel value at the centre (1/s): a pulse of area dv peaks at dv * peak."""
-        return float(self.kernel(np.zeros(1), fs)[0])
-
-    def norm(self, fs: float) -> float:
-        """Root sum of squares of the sampled kernel (1/s), centred on a sample."""
-        j = np.arange(-self.span(fs), self.span(fs) + 1, dtype=float)
-        return float(np.sqrt(np.sum(self.kernel(j, fs) ** 2)))
-
-
-_GAUSS = np.polynomial.legendre.leggauss(16)
-
-
-@functools.lru_cache(maxsize=32)
-def _kernel_flat(fs: float, cutoff: float, halfwidth: int, tau: float) -> np.ndarray:
-    """Kernel on a grid of 1/_OVERSAMPLE samples over +/- (span + 1) samples."""
-    H = halfwidth + int(math.ceil(tau * fs / 2.0)) + 1
-    x = np.arange(2 * H * _OVERSAMPLE + 2) / _OVERSAMPLE - H
-    if tau <= 0:
-        k = pulse_kernel(x / fs, fs, cutoff, 0.0, halfwidth)
-    else:
-        # the low-pass kernel convolved with a unit-area half-sine of width tau, by
-        # Gauss-Legendre quadrature on the tabulated tau = 0 kernel
-        k0 = _kernel_flat(fs, cutoff, halfwidth, 0.0)
-        H0 = halfwidth + 1
-        x0 = np.arange(k0.size) / _OVERSAMPLE - H0
-        nodes, weights = _GAUSS
-        s = 0.5 * tau * fs * nodes                               # samples
-        p = (math.pi / (2 * tau * fs)) * np.cos(math.pi * s / (tau * fs)) * 0.5 * tau * fs
-        k = np.zeros_like(x)
-        for si, wi in zip(s, p * weights):
-            k += wi * np.interp(x - si, x0, k0, left=0.0, right=0.0)
-    k.flags.writeable = False
-    return k
-
-
-@functools.lru_cache(maxsize=32)
-def _kernel_table(fs: float, cutoff: float, halfwidth: int, tau: float) -> np.ndarray:
-    flat = _kernel_flat(fs, cutoff, halfwidth, tau)
-    H = halfwidth + int(math.ceil(tau * fs / 2.0)) + 1
-    p = np.arange(_OVERSAMPLE + 1)[:, None]
-    m = np.arange(2 * H)[None, :]
-    T = flat[np.minimum(m * _OVERSAMPLE + p, flat.size - 1)]
-    T.flags.writeable = False
-    return T
-
-
-_TABLE_PAD = 48
-
-
-@functools.lru_cache(maxsize=32)
-def _kernel_table_padded(fs: float, cutoff: float, halfwidth: int, tau: float) -> np.ndarray:
-    T = _kernel_table(fs, cutoff, halfwidth, tau)
-    out = np.zeros((T.shape[0], T.shape[1] + 2 * _TABLE_PAD))
-    out[:, _TABLE_PAD:_TABLE_PAD + T.shape[1]] = T
-    out.flags.writeable = False
-    return out
 
 
 @functools.lru_cache(maxsize=32)
@@ -261,6 +125,9 @@ class ImpactDetection:
         Clipped and NaN acceleration samples.
     pulse : PulseModel
         The pulse shape used.
+    response : PulseResponse or None
+        The response learned from the recording (None when a model was given, or
+        too few strong isolated pulses were found to learn one).
     warnings : tuple of str
         Conditions worth reporting (clipping, dropouts, side inconsistencies).
     """
@@ -277,6 +144,7 @@ class ImpactDetection:
     n_clipped: int = 0
     n_dropout: int = 0
     pulse: PulseModel = field(default_factory=PulseModel)
+    response: PulseResponse | None = None
     warnings: tuple = ()
 
     def __post_init__(self) -> None:
@@ -322,7 +190,7 @@ class ImpactDetection:
         return self.n_samples / self.sample_rate
 
 
-def detect_impacts(rec, *, threshold: float = 5.5, pulse: PulseModel | None = None,
+def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
                    mu: float = 0.0, baseline_ms: float = 6.4, fit_halfwidth: int = 8,
                    max_rounds: int = 4, mismatch: float = 0.03,
                    a_range: float | None = None, b: float | None = None,
@@ -381,7 +249,9 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse: PulseModel | None = No
     >>> det.n == truth.impacts.n - int((abs(truth.impacts.dv) < 1e-4).sum())
     True
     """
-    pulse = pulse or PulseModel()
+    if pulse is not None and not isinstance(pulse, (PulseModel, PulseResponse)):
+        raise InputError(f"pulse must be a PulseModel, a PulseResponse or None (learn it), "
+                         f"was {pulse!r}")
     if not (math.isfinite(threshold) and threshold > 0):
         raise InputError(f"threshold must be > 0 (matched-filter SNR), was {threshold!r}")
     if not (isinstance(fit_halfwidth, (int, np.integer)) and 3 <= fit_halfwidth <= 32):
@@ -401,6 +271,17 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse: PulseModel | None = No
     clip = clipped_mask(a, a_range)
     bad = nan | clip
     af = fill_gaps(a, bad)
+    warnings: list[str] = []
+    response = pulse if isinstance(pulse, PulseResponse) else None
+    if pulse is None:
+        response = learn_pulse(af, fs, bad, smooth_ms=baseline_ms)
+        if response is None:
+            warnings.append("too few strong isolated pulses to learn the pulse response: "
+                            "the default linear-phase model was used")
+    if response is not None:
+        pulse = response.model
+        fit_width = False                 # the learned model has its contact duration
+    pulse = pulse or PulseModel()
     hw = pulse.span(fs)
     win = max(7, int(round(baseline_ms * 1e-3 * fs)) | 1)
     if win > n:
@@ -426,7 +307,7 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse: PulseModel | None = No
         return fill_gaps(sm, mask) if mask.any() else sm
 
     # round 0: the strong pulses over a first (pulse-contaminated) smooth part
-    base = _smoother(smoother_input(), win)
+    base = savgol_smooth(smoother_input(), win)
     d2 = np.diff(af, 2)[~(bad[2:] | bad[1:-1] | bad[:-2])]
     sigma = robust_std(d2[:: max(1, d2.size // 8192)]) / math.sqrt(6.0)
     resid = af - base
@@ -448,7 +329,7 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse: PulseModel | None = No
     fit.add(first)
     if fit.n:
         fit.backfit(base, iterations=1)
-        base = _smoother(smoother_input(), win)
+        base = savgol_smooth(smoother_input(), win)
         fit.backfit(base, iterations=1)
         if fit_width:
             wider = _wider_pulse(fit, base, sigma, knorm)
@@ -461,7 +342,7 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse: PulseModel | None = No
                 fit = _Fitter(af, bad, pulse, fs, int(fit_halfwidth), grid, basis, Qm)
                 fit.pos, fit.amp = old.pos, old.amp
                 fit.backfit(base, iterations=1)
-                base = _smoother(smoother_input(), win)
+                base = savgol_smooth(smoother_input(), win)
                 fit.backfit(base, iterations=1)
     # later rounds: the residual of the fitted pulses over the clean smooth part (weak
     # pulses hardly change the smooth part or the noise, so neither is recomputed)
@@ -484,7 +365,7 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse: PulseModel | None = No
         if _largest_near(fit.pos, fit.amp, idx) * knorm / sigma > _REBASE_SNR:
             # a strong pulse missed by the first round was smeared into the smooth
             # part: recompute it, else its lobes come back as false pulses
-            base = _smoother(smoother_input(), win)
+            base = savgol_smooth(smoother_input(), win)
             fit.backfit(base, iterations=1)
     # final residual, noise and pruning at the threshold
     smooth = smooth_part()
@@ -509,19 +390,23 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse: PulseModel | None = No
         a_smooth[bad] = base[bad]
         resid = a_smooth - base
 
-    warnings: list[str] = []
     b = float(rec.meta.b if b is None else b)
+    n_early = fit.drop_before(pulse.delay(fs) * fs - 0.5)
+    if n_early:
+        warnings.append(f"{n_early} pulse(s) at the record start ignored: their contact would "
+                        "begin before the first sample (the anti-alias filter's start-up)")
     n_fast = fit.drop_fast_crossings(2.0 * b / max_ball_speed * fs) if max_ball_speed > 0 else 0
     if n_fast:
         warnings.append(f"{n_fast} weak pulse(s) dropped: the ball cannot cross the clearance "
                         f"2b = {2 * b * 1e3:.3g} mm faster than {max_ball_speed:g} m/s")
+    if n_fast or n_early:
         smooth = smooth_part()
         resid = smooth - base
         resid[bad] = 0.0
         a_smooth = smooth
         if bad.any():
             a_smooth[bad] = base[bad]
-    table = fit.table(float(rec.t[0]), resid, sigma, knorm, clip, nan)
+    table = fit.table(float(rec.t[0]) - pulse.delay(fs), resid, sigma, knorm, clip, nan)
     if table["t"].size:
         check = _alternation_check(table, base, mu, sigma)
         table["side_check"] = check
@@ -544,28 +429,7 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse: PulseModel | None = No
                            sample_rate=fs, n_samples=n, t0=float(rec.t[0]),
                            a_smooth=a_smooth, baseline=base, bad=bad,
                            n_clipped=int(clip.sum()), n_dropout=int(nan.sum()),
-                           pulse=pulse, warnings=tuple(warnings))
-
-
-@functools.lru_cache(maxsize=8)
-def _savgol_parts(win: int):
-    """Savitzky-Golay (cubic) taps and the edge projections of mode 'interp'."""
-    h = win // 2
-    taps = savgol_coeffs(win, 3, use="dot")
-    j = np.arange(win, dtype=float)
-    V = np.vander(j - h, 4, increasing=True)
-    proj = V @ np.linalg.pinv(V)                    # fit a cubic to the edge window
-    return taps, proj[:h], proj[-h:]
-
-
-def _smoother(y: np.ndarray, win: int) -> np.ndarray:
-    """Cubic Savitzky-Golay smoothing (as ``savgol_filter(mode="interp")``)."""
-    taps, head, tail = _savgol_parts(win)
-    out = correlate1d(y, taps, mode="nearest")
-    h = win // 2
-    out[:h] = head @ y[:win]
-    out[-h:] = tail @ y[-win:]
-    return out
+                           pulse=pulse, response=response, warnings=tuple(warnings))
 
 
 _TAU_GRID = (0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0)   # contact durations tried (samples)
@@ -600,7 +464,7 @@ def _wider_pulse(fit: _Fitter, base: np.ndarray, sigma: float, knorm: float):
     m0 = fit.pulse
 
     def model(k: float) -> PulseModel:
-        return PulseModel(m0.cutoff, m0.halfwidth, m0.tau + k / fit.fs)
+        return replace(m0, tau=m0.tau + k / fit.fs)
 
     taus, chis = [0.0], [chi0]
     for k in _TAU_GRID:            # the misfit is unimodal in tau: stop past the minimum
@@ -833,6 +697,12 @@ class _Fitter:
         others = np.maximum(_window_max(snr, lo, i), _window_max(snr, i + 1, hi))
         keep = snr > threshold + mismatch * others
         self.pos, self.amp = self.pos[keep], self.amp[keep]
+
+    def drop_before(self, first: float) -> int:
+        """Drop the pulses referenced before sample ``first``; return how many."""
+        keep = self.pos >= first
+        self.pos, self.amp = self.pos[keep], self.amp[keep]
+        return int((~keep).sum())
 
     def drop_fast_crossings(self, min_gap: float) -> int:
         """Drop the weaker of close opposite-sign pulses; return how many were dropped.

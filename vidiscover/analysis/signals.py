@@ -14,15 +14,18 @@ True
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.ndimage import correlate1d
+from scipy.signal import savgol_coeffs
 
 from ..errors import InputError
 
 __all__ = ["Forcing", "check_recording", "robust_std", "fill_gaps", "clipped_mask",
-           "fit_forcing", "MIN_SAMPLES", "MAX_DISPLACEMENT", "MAX_ACCELERATION"]
+           "fit_forcing", "savgol_smooth", "MIN_SAMPLES", "MAX_DISPLACEMENT", "MAX_ACCELERATION"]
 
 #: Fewest samples an analysis accepts (10 ms at 6400 Hz): shorter records cannot
 #: hold one impact pulse with its acquisition kernel.
@@ -132,6 +135,39 @@ def fill_gaps(y: np.ndarray, bad: np.ndarray) -> np.ndarray:
     idx = np.arange(y.size)
     y[bad] = np.interp(idx[bad], idx[good], y[good])
     return y
+
+
+@functools.lru_cache(maxsize=8)
+def _savgol_parts(win: int):
+    """Savitzky-Golay (cubic) taps and the edge projections of mode 'interp'."""
+    h = win // 2
+    taps = savgol_coeffs(win, 3, use="dot")
+    j = np.arange(win, dtype=float)
+    V = np.vander(j - h, 4, increasing=True)
+    proj = V @ np.linalg.pinv(V)                    # fit a cubic to the edge window
+    return taps, proj[:h], proj[-h:]
+
+
+def savgol_smooth(y: np.ndarray, win: int) -> np.ndarray:
+    """Cubic Savitzky-Golay smoothing (as ``savgol_filter(y, win, 3, mode="interp")``).
+
+    Parameters
+    ----------
+    y : ndarray
+        Finite samples, at least ``win`` of them.
+    win : int
+        Odd window length (samples), >= 5.
+
+    Returns
+    -------
+    ndarray
+    """
+    taps, head, tail = _savgol_parts(win)
+    out = correlate1d(y, taps, mode="nearest")
+    h = win // 2
+    out[:h] = head @ y[:win]
+    out[-h:] = tail @ y[-win:]
+    return out
 
 
 def clipped_mask(a: np.ndarray, a_range: float | None = None) -> np.ndarray:

@@ -1,0 +1,547 @@
+"""The pulse an impact leaves in the acceleration, and learning it from a recording.
+
+:class:`PulseModel` is the shape the detector fits (:mod:`.impacts`): one of the
+acquisition responses of :mod:`vidiscover.acquisition` (linear-phase windowed sinc,
+causal Butterworth / Bessel / Chebyshev I of order 2-8), optionally convolved with
+a contact half-sine of duration ``tau``, tabulated on a grid of 1/256 sample and
+referenced to its *peak*, so that fit windows and matched filters stay centred on
+the main lobe whatever the filter's delay. ``delay`` is the time from the contact
+entry to that reference: an impact fitted at ``t_ref`` entered contact at
+``t_ref - delay``.
+
+:func:`learn_pulse` finds the model from the recording itself, without assuming
+the instrument:
+
+1. *Strong isolated transients.* The acceleration minus a cubic Savitzky-Golay
+   smoother (a few ms) is a broad, shape-free detector; local maxima above
+   ``min_snr`` noise standard deviations with no comparable transient within
+   ``isolation`` samples are kept, the strongest ``n_pulses`` of them. The smoother
+   is recomputed with their windows bridged, so the pulses do not leak into it.
+2. *Parametric fit.* Every candidate response (kind, order, cut-off; then the
+   contact duration) is fitted to all windows at once by variable projection: per
+   pulse, a free amplitude, a free sub-sample shift (grid of 1/20 sample refined by a
+   parabola) and a local straight line; the misfit is the residual energy summed
+   over the pulses. A coarse search over kinds, orders and cut-offs with
+   ``tau = 0`` picks the best families; cut-off and ``tau`` are then refined for
+   each (grid, then Nelder-Mead) and the least misfit wins.
+3. *Non-parametric check.* The windows, aligned with the fitted shifts and scaled by
+   the fitted amplitudes, are averaged on a grid of 1/8 sample: the super-resolved
+   template (:attr:`PulseResponse.template`). Its RMS deviation from the model,
+   relative to the peak, is :attr:`PulseResponse.misfit`: a large value says the
+   family does not hold the instrument.
+
+The delay comes from the model (causal filters have no flat start to read it
+from): the DC group delay ``sum -1/p_i`` is the centroid of the impulse response,
+the contact adds ``tau / 2``; the peak lies a little after the centroid for the
+smooth filters. Different (kind, order, cut-off, tau) that fit equally well can
+differ in delay by a few microseconds (the delay of the learned response is
+what sets the impact-time bias; see ``tests/test_pulse_learning.py`` for the
+measured errors).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy.optimize import minimize
+
+from ..acquisition import CAUSAL_KINDS, FILTER_KINDS, check_filter, dc_group_delay, pulse_response
+from ..errors import InputError
+from .signals import fill_gaps, robust_std, savgol_smooth
+
+__all__ = ["PulseModel", "PulseResponse", "learn_pulse"]
+
+_OVERSAMPLE = 256          # kernel table points per sample
+_TABLE_PAD = 48
+_MAX_SPAN = 160            # longest kernel half-support (samples)
+_MIN_SPAN = 24             # shortest (the detector's fit windows need room)
+_TAIL_REL = 2e-3           # the support ends where |g| stays below this share of the peak
+
+
+@dataclass(frozen=True)
+class PulseModel:
+    """Shape of the accelerometer pulse of one impact (unit area).
+
+    The default is the linear-phase acquisition model of the exact engine's default
+    sensors: a Kaiser windowed sinc low-pass at ``cutoff`` times the sampling rate,
+    centred on the contact midpoint, optionally convolved with a half-sine of the
+    contact duration ``tau``.
+
+    Parameters
+    ----------
+    cutoff : float
+        Low-pass cut-off as a fraction of the sampling rate, in (0, 0.5).
+    halfwidth : int
+        Half-width of the linear-phase kernel (samples).
+    tau : float
+        Contact duration (s), 0 for instantaneous impacts.
+    kind : str
+        Filter kind (:data:`vidiscover.acquisition.FILTER_KINDS`).
+    order : int
+        Order of a causal kind (2-8; ignored for ``linear-phase``).
+    """
+
+    cutoff: float = 0.45
+    halfwidth: int = 24
+    tau: float = 0.0
+    kind: str = "linear-phase"
+    order: int = 0
+
+    def __post_init__(self) -> None:
+        if not (isinstance(self.cutoff, (int, float, np.floating)) and 0 < self.cutoff < 0.5):
+            raise InputError(f"cutoff must be in (0, 0.5) of the sampling rate, "
+                             f"was {self.cutoff!r}")
+        if not (isinstance(self.halfwidth, (int, np.integer)) and 4 <= self.halfwidth <= 256):
+            raise InputError(f"halfwidth must be an integer in [4, 256] samples, "
+                             f"was {self.halfwidth!r}")
+        if not (math.isfinite(self.tau) and self.tau >= 0):
+            raise InputError(f"tau must be >= 0 s, was {self.tau!r}")
+        check_filter(self.kind, self.order, self.cutoff)
+
+    @property
+    def causal(self) -> bool:
+        """True for the causal analog kinds."""
+        return self.kind in CAUSAL_KINDS
+
+    def delay(self, fs: float) -> float:
+        """Time (s) from the contact entry to the kernel reference (its peak)."""
+        return _layout(self, float(fs))[0] / fs
+
+    def centroid(self, fs: float) -> float:
+        """Centroid of the response after the contact entry (s): DC group delay + tau/2."""
+        return (dc_group_delay(self.kind, self.order, self.cutoff) / fs + 0.5 * self.tau)
+
+    def span(self, fs: float) -> int:
+        """Half-width of the pulse support (samples) about the reference."""
+        return _layout(self, float(fs))[1]
+
+    def table(self, fs: float) -> np.ndarray:
+        """Polyphase table of the kernel (1/s).
+
+        Row p, column m holds the kernel at ``m - H + p / P`` samples from the
+        reference, ``H = span + 1``, ``P`` phases per sample.
+        """
+        return _kernel_table(self, float(fs))
+
+    def kernel(self, offset: np.ndarray, fs: float) -> np.ndarray:
+        """Kernel (1/s) at sample offsets ``offset`` (samples, float) from the reference."""
+        offset = np.asarray(offset, dtype=float)
+        H = self.span(fs) + 1
+        u = np.clip(offset + H, 0.0, 2 * H - 1e-9) * _OVERSAMPLE
+        i = np.floor(u).astype(np.int64)
+        w = u - i
+        flat = _kernel_flat(self, float(fs))
+        out = (1 - w) * flat[i] + w * flat[i + 1]
+        return np.where(np.abs(offset) < H, out, 0.0)
+
+    def rows(self, j: np.ndarray, delta: np.ndarray, fs: float) -> np.ndarray:
+        """Kernel at ``j - delta``, an (n, W) array.
+
+        For integer offsets ``j`` (W,), ``|j| <= span + 8``, and per-row delays
+        ``delta`` (n,), ``|delta| <= 3``, by linear interpolation between the
+        phases of :meth:`table`.
+        """
+        T = _kernel_table_padded(self, float(fs))
+        u = -np.asarray(delta, dtype=float)
+        fl = np.floor(u)
+        ph = (u - fl) * _OVERSAMPLE
+        pi = ph.astype(np.int64)
+        w = (ph - pi)[:, None]
+        m = j[None, :] + (self.span(fs) + 1 + _TABLE_PAD) + fl.astype(np.int64)[:, None]
+        row = pi[:, None]
+        lo = T[row, m]
+        return lo + w * (T[row + 1, m] - lo)
+
+    def peak(self, fs: float) -> float:
+        """Kernel value at the reference (1/s): a pulse of area dv peaks at dv * peak."""
+        return float(self.kernel(np.zeros(1), fs)[0])
+
+    def norm(self, fs: float) -> float:
+        """Root sum of squares of the sampled kernel (1/s), centred on a sample."""
+        j = np.arange(-self.span(fs), self.span(fs) + 1, dtype=float)
+        return float(np.sqrt(np.sum(self.kernel(j, fs) ** 2)))
+
+    def to_dict(self, fs: float) -> dict:
+        """JSON-ready description at sampling rate ``fs`` (Hz)."""
+        return {"kind": self.kind, "order": int(self.order) if self.causal else None,
+                "cutoff": float(self.cutoff), "cutoff_hz": float(self.cutoff * fs),
+                "tau": float(self.tau), "delay": self.delay(fs),
+                "centroid": self.centroid(fs), "peak": self.peak(fs)}
+
+
+def _response(model: PulseModel, t: np.ndarray, fs: float) -> np.ndarray:
+    """Response (1/s) at times ``t`` (samples) from the contact entry (causal) or midpoint."""
+    return fs * pulse_response(t, model.kind, model.order, model.cutoff, model.tau * fs,
+                               model.halfwidth)
+
+
+def _origin(model: PulseModel, fs: float) -> float:
+    """Centroid of the response (samples) from the time origin of :func:`_response`."""
+    return model.centroid(fs) * fs if model.causal else 0.0
+
+
+def _peak_time(model: PulseModel, fs: float) -> float:
+    """Time (samples) of the peak of a causal response after the contact entry."""
+    # the peak lies before twice the centroid (delay) plus a few samples
+    end = 2.0 * model.centroid(fs) * fs + 4.0
+    t = np.arange(0.0, end, 1.0 / 16)
+    g = _response(model, t, fs)
+    i = int(np.argmax(g))
+    if 0 < i < g.size - 1:                           # parabolic refinement
+        den = g[i - 1] - 2 * g[i] + g[i + 1]
+        if den < 0:
+            return float(t[i] + 0.5 * (g[i - 1] - g[i + 1]) / den / 16)
+    return float(t[i])
+
+
+@functools.lru_cache(maxsize=256)
+def _layout(model: PulseModel, fs: float) -> tuple[float, int]:
+    """(reference offset from the contact entry, half-support about it), in samples."""
+    if not model.causal:
+        return 0.5 * model.tau * fs, int(model.halfwidth) + int(math.ceil(model.tau * fs / 2.0))
+    ref = _peak_time(model, fs)
+    t = np.arange(0.0, 2 * _MAX_SPAN, 1.0 / 4)
+    g = np.abs(_response(model, t, fs))
+    above = np.flatnonzero(g > _TAIL_REL * g.max())
+    tail = t[above[-1]] if above.size else ref
+    span = int(math.ceil(max(ref, tail - ref))) + 1
+    return float(ref), int(np.clip(span, _MIN_SPAN, _MAX_SPAN))
+
+
+@functools.lru_cache(maxsize=64)
+def _kernel_flat(model: PulseModel, fs: float) -> np.ndarray:
+    """Kernel on a grid of 1/_OVERSAMPLE samples over +/- (span + 1) samples."""
+    ref, span = _layout(model, fs)
+    H = span + 1
+    x = np.arange(2 * H * _OVERSAMPLE + 2) / _OVERSAMPLE - H
+    if model.causal:
+        k = _response(model, x + ref, fs)
+    else:
+        k = _response(model, x, fs)
+    k.flags.writeable = False
+    return k
+
+
+@functools.lru_cache(maxsize=64)
+def _kernel_table(model: PulseModel, fs: float) -> np.ndarray:
+    flat = _kernel_flat(model, fs)
+    H = model.span(fs) + 1
+    p = np.arange(_OVERSAMPLE + 1)[:, None]
+    m = np.arange(2 * H)[None, :]
+    T = flat[np.minimum(m * _OVERSAMPLE + p, flat.size - 1)]
+    T.flags.writeable = False
+    return T
+
+
+@functools.lru_cache(maxsize=64)
+def _kernel_table_padded(model: PulseModel, fs: float) -> np.ndarray:
+    T = _kernel_table(model, fs)
+    out = np.zeros((T.shape[0], T.shape[1] + 2 * _TABLE_PAD))
+    out[:, _TABLE_PAD:_TABLE_PAD + T.shape[1]] = T
+    out.flags.writeable = False
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class PulseResponse:
+    """A pulse response learned from a recording (:func:`learn_pulse`).
+
+    Attributes
+    ----------
+    model : PulseModel
+        The best parametric response (what the detector fits).
+    sample_rate : float
+        Hz.
+    n_pulses : int
+        Strong isolated pulses it was learned from.
+    misfit : float
+        RMS deviation of the super-resolved template from the model, relative to
+        the model's peak (about 0.01 when the family holds the instrument).
+    chi2 : float
+        Residual energy of the pulse fits per degree of freedom, in units of the
+        noise variance (1 for a perfect model).
+    template_t : ndarray
+        Times of :attr:`template` (s) from the contact entry.
+    template : ndarray
+        The aligned pulses averaged (1/s, per unit area): the non-parametric response.
+    pulses_t, pulses : ndarray
+        Each aligned, normalised pulse (times from the contact entry, s; values 1/s),
+        for the figure.
+    candidates : tuple of dict
+        The best model of each family tried, with its misfit (for the report).
+    seconds : float
+        Time spent learning (s).
+    """
+
+    model: PulseModel
+    sample_rate: float
+    n_pulses: int
+    misfit: float
+    chi2: float
+    template_t: np.ndarray = field(repr=False)
+    template: np.ndarray = field(repr=False)
+    pulses_t: np.ndarray = field(repr=False)
+    pulses: np.ndarray = field(repr=False)
+    candidates: tuple = field(default=(), repr=False)
+    seconds: float = 0.0
+
+    @property
+    def delay(self) -> float:
+        """Time (s) from the contact entry to the pulse peak."""
+        return self.model.delay(self.sample_rate)
+
+    @property
+    def width(self) -> float:
+        """Full width at half maximum of the template (s)."""
+        g, t = self.template, self.template_t
+        if g.size == 0:
+            return float("nan")
+        above = t[g >= 0.5 * g.max()]
+        return float(above[-1] - above[0]) if above.size else float("nan")
+
+    def to_dict(self) -> dict:
+        """JSON-ready summary: ``kind``, ``order``, ``cutoff_hz``, ``tau``, ``delay``, ..."""
+        out = self.model.to_dict(self.sample_rate)
+        out.update({"learned": True, "width": self.width, "n_pulses": self.n_pulses,
+                    "misfit": self.misfit, "chi2": self.chi2, "seconds": self.seconds})
+        return out
+
+
+_PRE_S, _POST_S = 1.6e-3, 5.0e-3   # window of a learning pulse about its peak (s) ...
+_PRE_MIN, _POST_MIN = 10, 32       # ... and at least these many samples
+
+
+def _window(fs: float) -> tuple[int, int]:
+    """Samples before and after the peak in a learning window."""
+    return max(_PRE_MIN, int(round(_PRE_S * fs))), max(_POST_MIN, int(round(_POST_S * fs)))
+_REFINE = 3                     # families refined in cut-off and contact duration
+_RES = 10                       # shift grid points per sample
+_STEP = 1.0 / _RES
+_SHIFTS = np.arange(-2 * _RES, 2 * _RES + 1) * _STEP   # about the centroid
+
+
+class _Objective:
+    """Misfit of a pulse model to the strong pulses, by variable projection."""
+
+    def __init__(self, Y: np.ndarray, fs: float, pre: int, post: int):
+        self.fs = fs
+        self.j = np.arange(-pre, post + 1, dtype=float)
+        # project the local straight line out of the data and of every template
+        B = np.stack([np.ones_like(self.j), self.j / post], axis=1)
+        self.Q = np.linalg.qr(B)[0]
+        self.Y = Y - (Y @ self.Q) @ self.Q.T
+        self.yy = float(np.sum(self.Y ** 2))
+        steps = np.rint(_SHIFTS / _STEP).astype(np.int64)
+        self.u0 = -pre - float(steps.max()) * _STEP
+        self.index = (np.arange(-pre, post + 1)[None, :] + pre) * _RES - steps[:, None] \
+            + steps.max()
+        self.nu = int(self.index.max()) + 1
+
+    def templates(self, model: PulseModel) -> np.ndarray:
+        ref = _origin(model, self.fs)
+        # j - shift on a grid of 1/10 sample: evaluate once, index per shift
+        u = self.u0 + np.arange(self.nu) * _STEP
+        g = _response(model, u + ref, self.fs)
+        K = g[self.index]
+        return K - (K @ self.Q) @ self.Q.T
+
+    def fit(self, model: PulseModel):
+        """(relative misfit, shift per pulse, amplitude per pulse)."""
+        K = self.templates(model)
+        kk = np.einsum("sw,sw->s", K, K)
+        C = self.Y @ K.T                                  # (n, S)
+        E = C ** 2 / kk[None, :]
+        g = np.argmax(E, axis=1)
+        gi = np.clip(g, 1, _SHIFTS.size - 2)
+        rows = np.arange(g.size)
+        e0, e1, e2 = E[rows, gi - 1], E[rows, gi], E[rows, gi + 1]
+        den = e0 - 2 * e1 + e2
+        with np.errstate(divide="ignore", invalid="ignore"):
+            frac = np.where(den < 0, 0.5 * (e0 - e2) / den, 0.0)
+        shift = _SHIFTS[gi] + np.clip(frac, -1, 1) * (_SHIFTS[1] - _SHIFTS[0])
+        amp = C[rows, g] / kk[g]
+        return (self.yy - float(np.sum(E[rows, g]))) / self.yy, shift, amp
+
+    def __call__(self, model: PulseModel) -> float:
+        return self.fit(model)[0]
+
+
+def _strong_pulses(af: np.ndarray, bad: np.ndarray, fs: float, n_pulses: int,
+                   min_snr: float, isolation: int, smooth_ms: float, pre: int, post: int):
+    """Peak samples of strong isolated transients and their windows (smooth part removed)."""
+    n = af.size
+    win = max(7, int(round(smooth_ms * 1e-3 * fs)) | 1)
+    if win > n:
+        win = n if n % 2 else n - 1
+    d2 = np.diff(af, 2)[~(bad[2:] | bad[1:-1] | bad[:-2])]
+    sigma = robust_std(d2[:: max(1, d2.size // 8192)]) / math.sqrt(6.0)
+    if not sigma > 0:
+        return np.zeros(0, dtype=np.int64), np.zeros((0, pre + post + 1)), sigma
+    resid = np.abs(af - savgol_smooth(af, win))
+    resid[bad] = 0.0
+    idx = np.flatnonzero(resid > min_snr * sigma)
+    if idx.size == 0:
+        return idx, np.zeros((0, pre + post + 1)), sigma
+    # local maxima over +/- isolation, strongest first; the next pulse is isolated when
+    # nothing above a third of it lies within the window (its own ringing stays below)
+    order = idx[np.argsort(-resid[idx])]
+    taken = np.zeros(n, dtype=bool)
+    peaks = []
+    for i in order:
+        if taken[i]:
+            continue
+        lo, hi = max(i - isolation, 0), min(i + isolation + 1, n)
+        taken[lo:hi] = True
+        seg = resid[lo:hi]
+        others = np.r_[seg[: max(i - lo - 3, 0)], seg[i - lo + 4:]]
+        if (i - pre - 2 >= 0 and i + post + 2 < n and not bad[i - pre:i + post + 1].any()
+                and (others.size == 0 or others.max() < resid[i] / 3)):
+            peaks.append(i)
+        if len(peaks) >= n_pulses:
+            break
+    peaks = np.array(sorted(peaks), dtype=np.int64)
+    if peaks.size == 0:
+        return peaks, np.zeros((0, pre + post + 1)), sigma
+    # the smooth part again with the pulse windows bridged
+    mask = bad.copy()
+    for i in peaks:
+        mask[i - pre:i + post + 1] = True
+    base = savgol_smooth(fill_gaps(af, mask), win)
+    jj = peaks[:, None] + np.arange(-pre, post + 1)[None, :]
+    Y = af[jj] - base[jj]
+    # the sign of the pulse: the side of its largest excursion
+    Y *= np.sign(Y[:, pre])[:, None]
+    return peaks, Y, sigma
+
+
+def _search(obj: _Objective, kinds, fs: float, halfwidth: int):
+    """Best models, least misfit first.
+
+    A coarse grid over families, cut-offs and contact durations, then Nelder-Mead in
+    (cut-off, tau) for the best families and their neighbouring orders.
+    """
+    cutoffs = np.geomspace(0.08, 0.48, 8)
+    taus = fs * np.array([0.0, 0.05e-3, 0.12e-3, 0.25e-3, 0.5e-3, 1.0e-3])     # samples
+    coarse = {}
+    for kind in kinds:
+        for order in ((2, 4, 6, 8) if kind in CAUSAL_KINDS else (0,)):
+            coarse[kind, order] = min(
+                (obj(PulseModel(float(c), halfwidth, ts / fs, kind, order)), float(c), ts)
+                for c in cutoffs for ts in taus)
+    top = sorted(coarse, key=coarse.get)[:_REFINE]
+    starts = {}
+    for kind, order in top:
+        near = (order - 1, order, order + 1) if kind in CAUSAL_KINDS else (order,)
+        for o in near:
+            if (kind in CAUSAL_KINDS and 2 <= o <= 8) or o == order:
+                starts.setdefault((kind, o), coarse[kind, order])
+    results = []
+    for (kind, order), (m0, c0, t0) in starts.items():
+        def make(c, tau_s, kind=kind, order=order):
+            return PulseModel(float(c), halfwidth, float(tau_s) / fs, kind, order)
+
+        def f(v, make=make):
+            if not (0.02 < v[0] < 0.49 and v[1] >= 0):
+                return 10.0
+            return obj(make(v[0], v[1]))
+
+        x0 = [c0, max(t0, 0.2)]
+        opt = minimize(f, x0, method="Nelder-Mead",
+                       options={"xatol": 2e-3, "fatol": 1e-7, "maxiter": 50,
+                                "initial_simplex": [x0, [c0 * 1.08, x0[1]],
+                                                    [c0, x0[1] * 1.5 + 0.3]]})
+        v, m = (opt.x, opt.fun) if opt.fun < m0 else ((c0, t0), m0)
+        results.append((float(m), make(*v)))
+    results.sort(key=lambda r: r[0])
+    return results
+
+
+def learn_pulse(a: np.ndarray, fs: float, bad: np.ndarray | None = None, *,
+                n_pulses: int = 40, min_pulses: int = 4, min_snr: float = 40.0,
+                isolation: int = 24, smooth_ms: float = 6.4, kinds=FILTER_KINDS,
+                halfwidth: int = 24) -> PulseResponse | None:
+    """Learn the accelerometer's pulse response from the strongest isolated pulses.
+
+    Parameters
+    ----------
+    a : ndarray
+        Acceleration (m/s^2); NaN samples are masked.
+    fs : float
+        Sampling rate (Hz).
+    bad : ndarray of bool, optional
+        Samples to ignore (dropouts, clipped readings).
+    n_pulses : int
+        Strongest isolated pulses used.
+    min_pulses : int
+        Fewest pulses to learn from; with fewer, None is returned.
+    min_snr : float
+        A pulse's peak must exceed this many noise standard deviations.
+    isolation : int
+        No comparable transient within this many samples of a learning pulse.
+    smooth_ms : float
+        Window of the smoother of the forced response (ms).
+    kinds : sequence of str
+        Filter kinds tried (:data:`vidiscover.acquisition.FILTER_KINDS`).
+    halfwidth : int
+        Half-width of the linear-phase kernel (samples).
+
+    Returns
+    -------
+    PulseResponse or None
+        None when the record holds fewer than ``min_pulses`` strong isolated pulses.
+    """
+    start = time.perf_counter()
+    for k in kinds:
+        if k not in FILTER_KINDS:
+            raise InputError(f"kinds must be among {', '.join(FILTER_KINDS)}, was {k!r}")
+    if not (isinstance(n_pulses, (int, np.integer)) and n_pulses >= min_pulses >= 2):
+        raise InputError(f"n_pulses must be an integer >= min_pulses >= 2, was "
+                         f"{n_pulses!r} (min_pulses {min_pulses!r})")
+    a = np.asarray(a, dtype=float)
+    nan = ~np.isfinite(a)
+    bad = nan if bad is None else (np.asarray(bad, dtype=bool) | nan)
+    af = fill_gaps(a, bad)
+    fs = float(fs)
+    pre, post = _window(fs)
+    isolation = max(int(isolation), int(round(isolation * fs / 6400.0)))
+    peaks, Y, sigma = _strong_pulses(af, bad, fs, int(n_pulses), float(min_snr),
+                                     isolation, float(smooth_ms), pre, post)
+    if peaks.size < min_pulses:
+        return None
+    obj = _Objective(Y, fs, pre, post)
+    results = _search(obj, tuple(kinds), fs, int(halfwidth))
+    best = results[0][1]
+    _, shift, amp = obj.fit(best)
+    ref = _origin(best, fs) + (0.0 if best.causal else 0.5 * best.tau * fs)
+    # aligned, normalised pulses: times from the contact entry (samples)
+    tj = obj.j[None, :] - shift[:, None] + ref
+    P = Y / amp[:, None]
+    step = 1.0 / 8
+    bins = np.arange(math.floor(tj.min()), math.ceil(tj.max()) + step, step)
+    k = np.clip(np.searchsorted(bins, tj.ravel()) - 1, 0, bins.size - 2)
+    cnt = np.bincount(k, minlength=bins.size - 1)
+    tot = np.bincount(k, weights=P.ravel(), minlength=bins.size - 1)
+    centre = bins[:-1] + step / 2
+    use = cnt >= max(2, peaks.size // 8)
+    tmpl_t, tmpl = centre[use], tot[use] / cnt[use]
+    # the template's line is the data's smooth-part error: compare with the model
+    # after removing a straight line from both
+    model_v = _response(best, tmpl_t if best.causal else tmpl_t - 0.5 * best.tau * fs, fs)
+    B = np.stack([np.ones_like(tmpl_t), tmpl_t / max(float(np.ptp(tmpl_t)), 1.0)], axis=1)
+    resid = tmpl - model_v
+    resid = resid - B @ np.linalg.lstsq(B, resid, rcond=None)[0]
+    misfit = float(np.sqrt(np.mean(resid ** 2)) / best.peak(fs))
+    dof = max(Y.size - 4 * peaks.size, 1)
+    chi2 = results[0][0] * obj.yy / (sigma ** 2 * dof)
+    cands = tuple({"kind": m.kind, "order": m.order if m.causal else None,
+                   "cutoff_hz": m.cutoff * fs, "tau": m.tau, "delay": m.delay(fs),
+                   "misfit": float(v)} for v, m in results)
+    return PulseResponse(model=best, sample_rate=fs, n_pulses=int(peaks.size),
+                         misfit=misfit, chi2=float(chi2), template_t=tmpl_t / fs,
+                         template=tmpl, pulses_t=tj / fs, pulses=P, candidates=cands,
+                         seconds=time.perf_counter() - start)
+
