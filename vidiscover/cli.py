@@ -31,7 +31,11 @@ def _fail(message: str) -> None:
 
 
 def handle_errors(func):
-    """Turn :class:`InputError` (and missing files) into one line + exit 2."""
+    """One line + exit 2 for :class:`InputError` and missing files; exit 130 on Ctrl-C.
+
+    Outputs are written atomically (:mod:`vidiscover._atomic`), so an interrupted
+    command leaves neither output nor temporary files behind.
+    """
 
     @functools.wraps(func)
     def wrapper(*args, **kwargs):
@@ -41,6 +45,9 @@ def handle_errors(func):
             _fail(str(err))
         except FileNotFoundError as err:
             _fail(f"{err.filename}: no such file; check the path")
+        except KeyboardInterrupt:
+            click.echo("vidiscover: interrupted; no output was written", err=True)
+            sys.exit(130)
 
     return wrapper
 
@@ -56,15 +63,33 @@ def emit(as_json: bool, payload: dict, human: str) -> None:
 
 
 def check_out_dir(out) -> Path:
-    """``--out`` as a Path, refused in one line when it exists and is not a directory.
+    """``--out`` as a Path, refused in one line unless the command may write it.
 
-    Commands call this before any work so that a bad ``--out`` fails at once, not
-    after minutes of computation; the writer (:func:`vidiscover._atomic.atomic_directory`)
-    checks again when it writes.
+    A directory may be written when it is new, empty or an earlier output of
+    vidiscover (replaced as a whole); a file, a folder holding other files or an
+    unwritable location is refused. Commands call this before any work so that a bad
+    ``--out`` fails at once, not after minutes of computation; the writer
+    (:func:`vidiscover._atomic.atomic_directory`) checks again when it writes.
     """
+    from ._atomic import check_output_dir
+
+    try:
+        return check_output_dir(out)
+    except InputError as err:
+        raise InputError(f"--out {err}") from None
+
+
+def check_out_file(out) -> Path:
+    """``--out`` of a command writing files (not a folder), checked before any work."""
+    from ._atomic import check_writable
+
     out = Path(out)
-    if out.exists() and not out.is_dir():
-        raise InputError(f"--out {out}: exists and is not a directory; choose another --out")
+    if out.is_dir():
+        raise InputError(f"--out {out}: is a directory; give a file name, e.g. {out}/rec.csv")
+    try:
+        check_writable(out)
+    except InputError as err:
+        raise InputError(f"--out {err}") from None
     return out
 
 
@@ -101,15 +126,6 @@ def parse_assignments(items, option: str) -> dict[str, float]:
     return out
 
 
-def _parse_params(preset_name: str, b: float | None, param: tuple[str, ...]):
-    from .params import preset
-
-    changes = parse_assignments(param, "--param")
-    if b is not None:
-        changes["b"] = b
-    return preset(preset_name, **changes)
-
-
 class LazyGroup(click.Group):
     """A click group whose commands live in their own modules, imported on use.
 
@@ -142,7 +158,7 @@ class LazyGroup(click.Group):
 
     def _short_help(self, ctx, name):
         cmd = super().get_command(ctx, name)
-        return cmd.get_short_help_str(limit=70) if cmd is not None else ""
+        return cmd.get_short_help_str(limit=200) if cmd is not None else ""
 
 
 #: Commands defined outside this module: name -> "module:attribute".
@@ -193,16 +209,133 @@ def main() -> None:
 
 
 # --------------------------------------------------------------------------- simulate
+#: Rig parameters that have their own option on ``simulate`` (besides ``--param``).
+RIG_OPTIONS = {"m1": "LO mass (kg)", "m2": "ball mass (kg)", "c1": "LO damping (N s/m)",
+               "k1": "LO stiffness (N/m)", "amplitude": "base amplitude (m)",
+               "frequency": "drive frequency (Hz)"}
+
+
+def _parse_params(preset_name: str, b: float | None, param: tuple[str, ...],
+                  rig: dict | None = None):
+    from .params import preset
+
+    changes = parse_assignments(param, "--param")
+    for name, value in (rig or {}).items():
+        if value is not None:
+            changes[name] = value
+    if b is not None:
+        changes["b"] = b
+    return preset(preset_name, **changes)
+
+
+def _mount_resonance(spec: str | None) -> dict:
+    """``--mount-resonance HZ[:ZETA]`` as SensorConfig fields."""
+    if spec is None:
+        return {}
+    hz, _, zeta = spec.partition(":")
+    try:
+        out = {"mount_resonance": float(hz)}
+        if zeta:
+            out["mount_zeta"] = float(zeta)
+    except ValueError:
+        raise InputError(f"--mount-resonance {spec!r}: expected HZ[:ZETA] with numbers, "
+                         "e.g. --mount-resonance 12000:0.05") from None
+    return out
+
+
+_FULL_SCALE_KEYS = {"x": "x_full_scale", "xe": "xe_full_scale", "a": "a_full_scale"}
+_SENSITIVITY_KEYS = ("x_mV_per_mm", "xe_mV_per_mm", "a_mV_per_g")
+
+
+def sensor_config(*, sample_rate=None, anti_alias=None, a_bias=None, x_offset=None,
+                  xe_offset=None, adc_bits=None, full_scale=(), mount_resonance=None,
+                  sensitivity=(), noise: float = 1.0):
+    """The instrument chain of the ``simulate`` options as a ``SensorConfig``.
+
+    Options left at None keep the default sensor model's values (the paper's rig:
+    6400 Hz, linear-phase anti-alias filter, no offsets, no quantisation).
+    """
+    from .sensors import SensorConfig
+
+    fields: dict = {}
+    if sample_rate is not None:
+        fields["sample_rate"] = sample_rate
+    if anti_alias is not None:
+        fields.update(SensorConfig.parse_anti_alias(anti_alias))
+    for name, value in (("a_bias", a_bias), ("x_offset", x_offset), ("xe_offset", xe_offset),
+                        ("adc_bits", adc_bits)):
+        if value is not None:
+            fields[name] = value
+    for key, value in parse_assignments(full_scale, "--full-scale").items():
+        if key not in _FULL_SCALE_KEYS:
+            raise InputError(f"--full-scale {key}=...: unknown channel; use x, xe or a "
+                             "(e.g. --full-scale a=490)")
+        fields[_FULL_SCALE_KEYS[key]] = value
+    sens = parse_assignments(sensitivity, "--sensitivity")
+    unknown = sorted(set(sens) - set(_SENSITIVITY_KEYS))
+    if unknown:
+        raise InputError(f"--sensitivity {unknown[0]}=...: unknown key; use "
+                         f"{', '.join(_SENSITIVITY_KEYS)}")
+    if sens:
+        from .recording import PAPER_SENSITIVITY
+
+        fields["sensitivity"] = {**PAPER_SENSITIVITY, **sens}
+    fields.update(_mount_resonance(mount_resonance))
+    if noise < 0:
+        raise InputError(f"--noise must be >= 0 (a scale factor), was {noise!r}")
+    return SensorConfig(**fields).scaled_noise(noise)
+
+
+def _rig_option(name: str):
+    return click.option(f"--{name}", name, type=float, default=None,
+                        help=f"{RIG_OPTIONS[name]} (default: the preset's).")
+
+
+def _rig_options(func):
+    for name in reversed(list(RIG_OPTIONS)):
+        func = _rig_option(name)(func)
+    return func
+
+
 @main.command()
 @click.option("--preset", "preset_name", type=click.Choice(sorted(PRESETS)), default="paper",
               show_default=True, help="Parameter set (paper: Table 1 of Li et al. 2018).")
 @click.option("--b", type=float, default=None,
-              help="Nominal half-clearance in metres (e.g. 0.009 for 9 mm).")
+              help="Nominal half-clearance in metres (e.g. 0.009 for 9 mm); "
+                   "default: the preset's (paper: 0.0115).")
+@_rig_options
 @click.option("--param", multiple=True, metavar="NAME=VALUE",
               help="Change any parameter: m1, c1, k1, m2, b, amplitude, frequency, r.")
 @click.option("--effect", multiple=True, metavar="NAME[=VALUE,...]",
               help="Switch on an effect, e.g. coulomb_friction=0.3, inclination=2, "
-                   "asymmetric_restitution=0.88,0.2 (repeatable).")
+                   "asymmetric_restitution=0.88,0.2 (repeatable). Without values an effect "
+                   "takes its defaults, e.g. coulomb_friction: mu = 0.1, inclination: 1 "
+                   "deg (all listed in the README).")
+@click.option("--contact", multiple=True, metavar="[SIDE=]KIND:KEY=VALUE,...",
+              help="Compliant walls instead of instantaneous impacts: "
+                   "kelvin-voigt:k=3e7,r=0.7 or hunt-crossley:k=1e9,alpha=0.3[,n=1.5] for "
+                   "both walls, or right=... and left=... (repeat the option).")
+@click.option("--anti-alias", "anti_alias", default=None, metavar="KIND[:ORDER:CUTOFF_HZ]",
+              help="Anti-alias filter: linear-phase (default, delay-compensated), or causal "
+                   "butter, bessel, cheby1 (0.5 dB ripple) of order 2-8, e.g. butter:4:2500.")
+@click.option("--sample-rate", "sample_rate", type=float, default=None,
+              help="Sampling rate in Hz (default 6400).")
+@click.option("--a-bias", "a_bias", type=float, default=None,
+              help="Accelerometer DC bias (m/s^2).")
+@click.option("--x-offset", "x_offset", type=float, default=None,
+              help="Laser zero offset (m): the LO at rest does not read 0.")
+@click.option("--xe-offset", "xe_offset", type=float, default=None,
+              help="Base-sensor zero offset (m).")
+@click.option("--adc-bits", "adc_bits", type=int, default=None,
+              help="Quantise each channel to 2^N levels over its full scale (and clip).")
+@click.option("--full-scale", "full_scale", multiple=True, metavar="CHANNEL=VALUE",
+              help="Full scale of a channel for --adc-bits: x=0.01, xe=0.01 (m), "
+                   "a=490.5 (m/s^2, 50 g) by default.")
+@click.option("--mount-resonance", "mount_resonance", default=None, metavar="HZ[:ZETA]",
+              help="Accelerometer mounted resonance, e.g. 12000:0.05.")
+@click.option("--sensitivity", multiple=True, metavar="KEY=VALUE",
+              help="Sensor sensitivities for --units mV: x_mV_per_mm, xe_mV_per_mm, "
+                   "a_mV_per_g (default: the paper's 10000, 10000, 50.34).")
 @click.option("--seed", type=int, default=0, show_default=True, help="Seed of the sensor noise.")
 @click.option("--settle", type=float, default=20.0, show_default=True,
               help="Simulated time before the record starts (s).")
@@ -211,24 +344,45 @@ def main() -> None:
 @click.option("--noise", type=float, default=1.0, show_default=True,
               help="Scale factor of all sensor noise levels.")
 @click.option("--units", type=click.Choice(["SI", "mV"]), default="SI", show_default=True,
-              help="Write SI columns or raw sensor voltages (paper's sensitivities).")
+              help="Write SI columns or raw sensor voltages (see --sensitivity).")
 @click.option("--out", type=click.Path(dir_okay=False, path_type=Path), required=True,
               help="Recording to write (.csv, .parquet or .npz); metadata and ground "
                    "truth go beside it (rec.json, rec.truth.json).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document.")
 @handle_errors
-def simulate(preset_name, b, param, effect, seed, settle, duration, noise, units, out,
+def simulate(preset_name, b, m1, m2, c1, k1, amplitude, frequency, param, effect, contact,
+             anti_alias, sample_rate, a_bias, x_offset, xe_offset, adc_bits, full_scale,
+             mount_resonance, sensitivity, seed, settle, duration, noise, units, out,
              as_json):
-    """Simulate a rig exactly and write a realistic recording plus ground truth."""
+    """Simulate a rig and write a realistic recording plus its ground truth.
+
+    Without --contact the impacts are instantaneous (exact event-driven engine);
+    with it the walls are compliant (contacts of finite duration, integrated).
+    The instrument options model the acquisition chain of a real rig.
+    """
     from .workflows import simulate_recording
 
-    params = _parse_params(preset_name, b, param)
+    out = check_out_file(out)
+    rig = {"m1": m1, "m2": m2, "c1": c1, "k1": k1, "amplitude": amplitude,
+           "frequency": frequency}
+    params = _parse_params(preset_name, b, param, rig)
+    contact_model = None
+    if contact:
+        from .simulation.contact import ContactModel
+
+        contact_model = ContactModel.parse(list(contact))
+    sensors = sensor_config(sample_rate=sample_rate, anti_alias=anti_alias, a_bias=a_bias,
+                            x_offset=x_offset, xe_offset=xe_offset, adc_bits=adc_bits,
+                            full_scale=full_scale, mount_resonance=mount_resonance,
+                            sensitivity=sensitivity, noise=noise)
     summary = simulate_recording(params, effect, out, seed=seed, settle=settle,
-                                 duration=duration, noise=noise, units=units)
+                                 duration=duration, units=units, sensors=sensors,
+                                 contact=contact_model)
     imp = summary["impacts"]
+    engine = "exact" if contact_model is None else f"compliant ({contact_model.describe()})"
     human = (f"wrote {', '.join(summary['files'])}\n"
              f"{imp['n']} impacts ({imp['right']} right, {imp['left']} left) in "
-             f"{duration:g} s; regime {summary['regime']['label']}; "
+             f"{duration:g} s; regime {summary['regime']['label']}; engine {engine}; "
              f"effects: {summary['effects_text']}")
     emit(as_json, summary, human)
 

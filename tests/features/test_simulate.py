@@ -1,4 +1,6 @@
 
+import json
+
 import numpy as np
 import pytest
 from click.testing import CliRunner
@@ -108,3 +110,43 @@ def says(cli, text):
 @then("no file is written")
 def no_file(cli):
     assert list(cli["dir"].iterdir()) == []
+
+
+@then("the command succeeds")
+def succeeds(cli):
+    assert cli["res"].exit_code == 0, cli["res"].output
+
+
+@then(parsers.parse("the files {a}, {b} and {c} are written"))
+def files_written(cli, a, b, c):
+    for name in (a, b, c):
+        assert (cli["dir"] / name).is_file(), name
+
+
+@then(parsers.parse("every impact in {name} has t_in < t_out"))
+def contact_episodes(cli, name):
+    truth = json.loads((cli["dir"] / name).read_text())
+    imps = truth["impacts"]
+    assert len(imps) > 0
+    assert all(i["t_in"] < i["t_out"] for i in imps)
+    assert all(i["t"] == i["t_in"] for i in imps)
+
+
+@then(parsers.parse("{name} has the columns {c1}, {c2}, {c3} and {c4}"))
+def has_columns(cli, name, c1, c2, c3, c4):
+    header = (cli["dir"] / name).read_text().splitlines()[0]
+    assert header.split(",") == [c1, c2, c3, c4]
+
+
+@then(parsers.parse('"vidiscover {args}" finds impacts in it'))
+def analyze_reads_back(cli, args):
+    res = CliRunner().invoke(main, [*args.split(), "--json"])
+    assert res.exit_code == 0, res.output
+    assert json.loads(res.stdout)["impacts"]["n"] > 0
+
+
+@then(parsers.parse("{name} records m1 {m1:g}, k1 {k1:g}, m2 {m2:g} and a sample rate "
+                    "of {fs:g} Hz"))
+def rig_metadata(cli, name, m1, k1, m2, fs):
+    meta = json.loads((cli["dir"] / name).read_text())
+    assert (meta["m1"], meta["k1"], meta["m2"], meta["sample_rate"]) == (m1, k1, m2, fs)
