@@ -76,7 +76,8 @@ def test_demo_writes_recordings_reports_and_an_index(tmp_path):
     out = tmp_path / "demo"
     doc = run_demo(out, seed=1, progress=False, clearances_mm=(9.0, 15.0), settle=4.0,
                    duration=2.0, figures=False)
-    written = sorted(str(p.relative_to(out)) for p in out.rglob("*") if p.is_file())
+    written = sorted(str(p.relative_to(out)) for p in out.rglob("*")
+                     if p.is_file() and p.name != ".vidiscover")
     assert sorted(doc["outputs"]) == written
     for stem in ("paper_b9mm", "paper_b15mm"):
         for f in (f"{stem}.csv", f"{stem}.json", f"{stem}.truth.json", f"{stem}.png",
