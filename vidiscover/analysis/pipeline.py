@@ -21,10 +21,11 @@ import pandas as pd
 from .._atomic import to_jsonable
 from ..errors import InputError
 from .impacts import ImpactDetection, detect_impacts
+from .pulse import PulseModel
 from .reconstruction import Reconstruction, reconstruct
 from .restitution import MU_TABLE, RestitutionEstimate, estimate_restitution, mu_table
 from .returnmap import FeatureContext, ReturnMap, compute_features, return_map
-from .signals import Forcing, fit_forcing
+from .signals import Forcing, Offsets, estimate_offsets, fit_forcing
 
 __all__ = ["AnalysisResult", "analyze"]
 
@@ -58,6 +59,8 @@ class AnalysisResult:
     warnings : tuple of str
     theta_deg : float
         Inclination assumed (deg; from a flight law, else 0).
+    offsets : Offsets
+        Accelerometer bias and displacement zero offsets, removed before stages 2-4.
     """
 
     name: str
@@ -73,10 +76,14 @@ class AnalysisResult:
     warnings: tuple = ()
     _recording: object = field(default=None, repr=False)
     theta_deg: float = 0.0
+    offsets: Offsets = field(default_factory=Offsets)
 
     @property
     def recording(self):
-        """The analysed :class:`~vidiscover.recording.Recording` (None if not kept)."""
+        """The analysed :class:`~vidiscover.recording.Recording` (None if not kept).
+
+        Its offsets (:attr:`offsets`) are removed.
+        """
         return self._recording
 
     def summary(self) -> dict:
@@ -86,7 +93,10 @@ class AnalysisResult:
         ``noise``}, ``restitution`` {``mu``, ``right``/``left`` {``n``, ``rms``,
         ``mean``, ``median``, ``std``, ``ci_low``, ``ci_high``, ...}}, ``regime``
         {``label``}, ``flights`` {``n``, ``stick``}, ``forcing``, ``features``,
-        ``recording``, ``b``, ``mu``, ``warnings``. NaN becomes None.
+        ``recording``, ``b``, ``mu``, ``warnings``, ``pulse_response`` {``kind``,
+        ``order``, ``cutoff_hz``, ``tau``, ``delay``, ``centroid``, ``width``,
+        ``learned``, ...} and ``offsets`` {``a_bias``, ``x_offset``, ``xe_offset``,
+        ``n_cycles``}. NaN becomes None.
         """
         det = self.detection
         side = det.side
@@ -115,6 +125,8 @@ class AnalysisResult:
                           "clusters": self.returnmap.n_clusters},
             "features": self.features,
             "regime": {"label": self.regime_label},
+            "pulse_response": _pulse_summary(det),
+            "offsets": self.offsets.to_dict(),
             "warnings": list(self.warnings),
         })
 
@@ -149,7 +161,8 @@ class AnalysisResult:
 
 
 def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 5.5,
-            n_boot: int = 1000, seed: int = 0, flight_law=None) -> AnalysisResult:
+            n_boot: int = 1000, seed: int = 0, flight_law=None,
+            pulse: PulseModel | None = None, offsets: bool = True) -> AnalysisResult:
     """Run stages 1-4 on a recording: impacts, reconstruction, restitution, return map.
 
     Parameters
@@ -172,6 +185,14 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 
         inclination corrects the ball velocity at every impact of a free flight
         (exactly: the tilt is absorbed by a change of frame). The plotted ball
         path between impacts stays the friction-only one.
+    pulse : PulseModel, optional
+        A known pulse response (e.g. ``PulseModel()`` for the exact engine's default
+        sensors); default: learned from the recording
+        (:func:`vidiscover.analysis.pulse.learn_pulse`).
+    offsets : bool
+        Estimate the accelerometer bias and the displacement zero offsets over whole
+        forcing cycles and remove them before stages 2-4
+        (:func:`vidiscover.analysis.signals.estimate_offsets`).
 
     Returns
     -------
@@ -189,12 +210,18 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 
     if not (isinstance(mu, (int, float)) and math.isfinite(mu) and 0 <= mu <= 2):
         raise InputError(f"mu must be in [0, 2] (friction coefficient), was {mu!r}")
     b = float(rec.meta.b if b is None else b)
-    det = detect_impacts(rec, threshold=threshold, mu=mu, b=b)     # checks the recording
+    det = detect_impacts(rec, threshold=threshold, mu=mu, b=b,      # checks the recording
+                         pulse=pulse)
+    forcing = fit_forcing(rec.t, rec.xe, rec.meta.frequency)
+    off = Offsets()
+    if offsets:
+        off = estimate_offsets(rec.t, rec.x, rec.a, rec.xe, forcing, det.t)
+        rec = _without_offsets(rec, off)
+    det = _smooth_part_corrected(det, off.a_bias)
     recon = reconstruct(det, rec, b=b, mu=mu)
     if theta_deg != 0.0:
         recon = _tilted(recon, det, rec, mu, theta_deg)
     rest = estimate_restitution(recon, det, n_boot=n_boot, seed=seed)
-    forcing = fit_forcing(rec.t, rec.xe, rec.meta.frequency)
     rm = return_map(det.t, det.side, forcing.period)
     ctx = FeatureContext(t=det.t, side=det.side, dv=det.dv, t_start=float(rec.t[0]),
                          t_end=float(rec.t[-1]) + 1.0 / det.sample_rate, forcing=forcing,
@@ -214,7 +241,50 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 
     return AnalysisResult(name=rec.name, b=b, mu=float(mu), forcing=forcing, detection=det,
                           reconstruction=recon, restitution=rest, returnmap=rm,
                           features=features, regime_label=None, warnings=tuple(warnings),
-                          _recording=rec, theta_deg=float(theta_deg))
+                          _recording=rec, theta_deg=float(theta_deg), offsets=off)
+
+
+def _pulse_summary(det: ImpactDetection) -> dict:
+    """The pulse response used (learned or given) for ``summary.json``."""
+    if det.response is not None:
+        return det.response.to_dict()
+    out = det.pulse.to_dict(det.sample_rate)
+    out["learned"] = False
+    return out
+
+
+def _without_offsets(rec, off: Offsets):
+    """``rec`` with the offsets subtracted (the same object when they are all 0)."""
+    if off.n_cycles == 0:
+        return rec
+    from dataclasses import replace
+
+    return replace(rec, x=rec.x - off.x_offset, a=rec.a - off.a_bias,
+                   xe=rec.xe - off.xe_offset)
+
+
+def _smooth_part_corrected(det: ImpactDetection, a_bias: float) -> ImpactDetection:
+    """``det`` with its smooth acceleration unbiased and advanced by the filter's delay.
+
+    A causal anti-alias filter delays the slow forced response by its DC group
+    delay (the learned response's centroid less half the contact); the
+    reconstruction integrates that smooth part, so it is shifted back.
+    """
+    from dataclasses import replace
+
+    from ..acquisition import dc_group_delay
+
+    m = det.pulse
+    lag = dc_group_delay(m.kind, m.order, m.cutoff) if m.causal else 0.0   # samples
+    if a_bias == 0.0 and lag == 0.0:
+        return det
+    j = np.arange(det.n_samples, dtype=float)
+
+    def fix(v):
+        w = np.interp(j + lag, j, v) if lag else v
+        return w - a_bias
+
+    return replace(det, a_smooth=fix(det.a_smooth), baseline=fix(det.baseline))
 
 
 def _law_mu_theta(law) -> tuple[float, float]:

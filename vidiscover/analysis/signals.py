@@ -25,7 +25,8 @@ from scipy.signal import savgol_coeffs
 from ..errors import InputError
 
 __all__ = ["Forcing", "check_recording", "robust_std", "fill_gaps", "clipped_mask",
-           "fit_forcing", "savgol_smooth", "MIN_SAMPLES", "MAX_DISPLACEMENT", "MAX_ACCELERATION"]
+           "fit_forcing", "savgol_smooth", "Offsets", "estimate_offsets", "MIN_SAMPLES",
+           "MAX_DISPLACEMENT", "MAX_ACCELERATION"]
 
 #: Fewest samples an analysis accepts (10 ms at 6400 Hz): shorter records cannot
 #: hold one impact pulse with its acquisition kernel.
@@ -295,3 +296,109 @@ def fit_forcing(t: np.ndarray, xe: np.ndarray, f_hint: float, iterations: int = 
     if not math.isfinite(amp) or amp == 0.0 or amp < 3 * noise / math.sqrt(tt.size):
         return fallback
     return Forcing(float(f), float(amp), float(math.atan2(coef[1], coef[0])), "xe")
+
+
+@dataclass(frozen=True)
+class Offsets:
+    """Zero errors of the three channels (subtract them from the readings).
+
+    Attributes
+    ----------
+    a_bias : float
+        Accelerometer DC bias (m/s^2).
+    x_offset : float
+        Laser reading at the LO's rest position (m).
+    xe_offset : float
+        Base-sensor reading at the base's mean position (m).
+    n_cycles : int
+        Whole forcing cycles averaged (0: not estimated, all offsets 0).
+    """
+
+    a_bias: float = 0.0
+    x_offset: float = 0.0
+    xe_offset: float = 0.0
+    n_cycles: int = 0
+
+    def to_dict(self) -> dict:
+        """JSON-ready form (``a_bias``, ``x_offset``, ``xe_offset``, ``n_cycles``)."""
+        return {"a_bias": self.a_bias, "x_offset": self.x_offset, "xe_offset": self.xe_offset,
+                "n_cycles": self.n_cycles}
+
+
+def estimate_offsets(t: np.ndarray, x: np.ndarray, a: np.ndarray, xe: np.ndarray,
+                     forcing: Forcing, impacts: np.ndarray | None = None,
+                     edge_ms: float = 6.0) -> Offsets:
+    """Accelerometer bias and displacement zero offsets from whole forcing cycles.
+
+    Over a bounded motion, averages over N whole forcing cycles (window length
+    ``N T``) give the zeros:
+
+    * the base oscillates about its mean position: ``xe_offset = mean(xe)``;
+    * the LO's springs relax about the base's mean position, and the momentum
+      balance of LO and ball, ``m1 x'' + m2 y'' = -k1 (x - xe) - c1 (x' - xe') +
+      m2 g sin(theta)``, averaged (mean accelerations and relative velocity -> 0)
+      gives ``mean(x - xe) = m2 g sin(theta) / k1``: with the base at 0,
+      ``x_offset = mean(x)``. Friction is internal to LO + ball and leaves no static
+      deflection; the tilt's is ``m2 g sin(theta) / k1``, 0.4 um at 0.8 deg and
+      1.2 um at 2.5 deg for the paper's rig (neglected: below the laser noise);
+    * the mean LO acceleration is the velocity change over the window divided by
+      its length, so ``a_bias = mean(a) - (v(end) - v(start)) / (N T)``, with the
+      LO velocity at both ends from a local cubic fit of ``x`` (+/- ``edge_ms``);
+      the window is placed so that no impact falls within ``edge_ms`` of its ends.
+
+    Parameters
+    ----------
+    t, x, a, xe : ndarray
+        Time (s), LO displacement (m), LO acceleration (m/s^2), base displacement
+        (m); NaN samples are ignored.
+    forcing : Forcing
+        The forcing fitted to ``xe`` (its period sets the cycles).
+    impacts : ndarray, optional
+        Impact times (s), kept away from the window ends.
+    edge_ms : float
+        Half-window of the velocity fits at the ends (ms).
+
+    Returns
+    -------
+    Offsets
+        All zero (``n_cycles = 0``) when the record holds no whole cycle with
+        clear ends.
+    """
+    n = t.size
+    dt = float(t[1] - t[0]) if n > 1 else 0.0
+    T = forcing.period
+    span = float(t[-1] - t[0]) + dt
+    if not (dt > 0 and math.isfinite(T) and T > 0) or span < T + 4 * edge_ms * 1e-3:
+        return Offsets()
+    W = max(4, int(round(edge_ms * 1e-3 / dt)))
+    imp = np.sort(np.asarray(impacts, dtype=float)) if impacts is not None else np.zeros(0)
+    n_cyc = int((span - 2 * (W + 1) * dt) // T)
+    for n_try in (n_cyc, n_cyc - 1):
+        if n_try < 1:
+            break
+        L = int(round(n_try * T / dt))
+        for k0 in range(W + 1, n - L - W - 1, max(1, W // 2)):
+            k1 = k0 + L
+            ends = np.array([t[k0], t[k1]])
+            if imp.size:
+                near = np.abs(imp[None, :] - ends[:, None]).min(axis=1)
+                if (near <= (W + 2) * dt).any():
+                    continue
+            v = [_slope(x[k - W:k + W + 1], dt) for k in (k0, k1)]
+            if not all(math.isfinite(u) for u in v):
+                continue
+            seg = slice(k0, k1)
+            a_bias = float(np.nanmean(a[seg])) - (v[1] - v[0]) / (L * dt)
+            return Offsets(a_bias=a_bias, x_offset=float(np.nanmean(x[seg])),
+                           xe_offset=float(np.nanmean(xe[seg])), n_cycles=n_try)
+    return Offsets()
+
+
+def _slope(y: np.ndarray, dt: float) -> float:
+    """Derivative at the centre of ``y`` from a least-squares cubic (NaN if not finite)."""
+    if not np.isfinite(y).all():
+        return float("nan")
+    h = y.size // 2
+    s = (np.arange(y.size) - h) * dt
+    c = np.polynomial.polynomial.polyfit(s / (h * dt), y, 3)
+    return float(c[1] / (h * dt))
