@@ -529,6 +529,31 @@ def _impulse_split(result, a_os, edges, dt, tau):
     return a_os
 
 
+def _fir_decimate(h: np.ndarray, w: np.ndarray, big: int, n: int) -> np.ndarray:
+    """``upfirdn(h, w, 1, big)[..., q:q + n]`` with ``q = (h.size - 1) / big``, polyphase.
+
+    Each of the ``big`` phases of ``w`` is convolved with its phase of ``h`` at the
+    output rate, all in one real FFT (several times faster than ``upfirdn``).
+    """
+    from scipy import fft
+
+    q = (h.size - 1) // big
+    rows = -(-w.shape[-1] // big) + 1
+    pad = np.zeros(w.shape[:-1] + (rows * big,))
+    pad[..., big:big + w.shape[-1]] = w
+    grid = pad.reshape(w.shape[:-1] + (rows, big))
+    # phase r holds w[p big - r]
+    phases = np.empty(w.shape[:-1] + (rows - 1, big))
+    phases[..., 0] = grid[..., 1:, 0]
+    phases[..., 1:] = grid[..., :-1, big - 1:0:-1]
+    taps = np.zeros((q + 1) * big)
+    taps[:h.size] = h
+    taps = taps.reshape(q + 1, big)
+    size = fft.next_fast_len(rows + q, real=True)
+    spec = (fft.rfft(phases, size, axis=-2) * fft.rfft(taps, size, axis=0)).sum(axis=-1)
+    return fft.irfft(spec, size, axis=-1)[..., q:q + n]
+
+
 def _odd_pad(u: np.ndarray, before: int, after: int) -> np.ndarray:
     """Extend the last axis by point reflection about the end values (keeps the slope)."""
     parts = [u]
@@ -558,17 +583,6 @@ def _quintic_basis(s: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return pw @ c.T, d1 @ c.T, d2 @ c.T
 
 
-def _combine(coef: np.ndarray, basis: np.ndarray) -> np.ndarray:
-    """``(coef @ basis.T).ravel()`` as broadcast products.
-
-    With an inner dimension of 3-6 this beats a BLAS call several times over.
-    """
-    out = coef[:, :1] * basis[:, 0]
-    for j in range(1, coef.shape[1]):
-        out += coef[:, j:j + 1] * basis[:, j]
-    return out.ravel()
-
-
 def _os_signals(result, st, fs: float, n: int, big: int, n_pre: int):
     """Displacements at the oversampled instants and the LO velocity at the bin edges.
 
@@ -587,6 +601,8 @@ def _os_signals(result, st, fs: float, n: int, big: int, n_pre: int):
     x, v_edges, xe : ndarray
         LO displacement, LO velocity at the edges, base displacement.
     """
+    from threadpoolctl import threadpool_limits
+
     dt = 1.0 / (fs * big)
     h = 1.0 / fs
     settle = result.settle
@@ -608,14 +624,17 @@ def _os_signals(result, st, fs: float, n: int, big: int, n_pre: int):
     bv = _quintic_basis((m + 0.5) / big)[1] / h
     x = np.empty(knots.size * big - big + 1)
     v = np.empty(x.size + 1)
-    x[:-1] = _combine(coef, bx)
-    v[1:-1] = _combine(coef, bv)
-    x[-1] = kx[-1]
-    # xe: quadratic through the knots and the midpoint of each interval
-    u = m / big
-    lag = np.stack([(2 * u - 1) * (u - 1), 4 * u * (1 - u), u * (2 * u - 1)])
     xe = np.empty(x.size)
-    xe[:-1] = _combine(np.stack([kxe[:-1], mid["xe"], kxe[1:]], axis=1), lag.T)
+    u = m / big                 # xe: quadratic through the knots and the midpoint
+    lag = np.stack([(2 * u - 1) * (u - 1), 4 * u * (1 - u), u * (2 * u - 1)])
+    knots_mid = np.stack([kxe[:-1], mid["xe"], kxe[1:]], axis=1)
+    # one BLAS thread: these products have an inner dimension of 3-6, and a
+    # multi-threaded BLAS is 10-30x slower on them on a busy machine
+    with threadpool_limits(limits=1, user_api="blas"):
+        x[:-1] = (coef @ bx.T).ravel()
+        v[1:-1] = (coef @ bv.T).ravel()
+        xe[:-1] = (knots_mid @ lag).ravel()
+    x[-1] = kx[-1]
     xe[-1] = kxe[-1]
     ends = result.evaluate(np.array([knots[0] - 0.5 * dt, knots[-1] + 0.5 * dt]))["xd"]
     v[0], v[-1] = ends
@@ -634,8 +653,6 @@ _WARM_EFOLDS, _WARM_MAX = 10.0, 0.5
 
 def _oversampled_chain(result, cfg: SensorConfig, n: int, st: dict):
     """The general acquisition path (see :func:`record`): noise-free x, a, xe."""
-    from scipy import signal
-
     fs, big = cfg.sample_rate, cfg.oversample
     fs_os = fs * big
     dt = 1.0 / fs_os
@@ -675,8 +692,7 @@ def _oversampled_chain(result, cfg: SensorConfig, n: int, st: dict):
     if causal:
         y = _filter(aa, u)[:, i0:i0 + last + 1:big]
     else:
-        y = signal.upfirdn(aa, u[:, i0 - half:], 1, big, axis=-1)[
-            :, 2 * cfg.kernel_halfwidth:2 * cfg.kernel_halfwidth + n]
+        y = _fir_decimate(aa, u[:, i0 - half:], big, n)
     return y[0].copy(), y[1].copy(), y[2].copy()
 
 
