@@ -101,7 +101,11 @@ class SensorConfig:
         (missing keys: the paper's); None: :data:`~vidiscover.recording.PAPER_SENSITIVITY`.
         The recording's metadata carry the sensitivities used.
     oversample : int
-        Oversampling factor of the general acquisition path (1-64).
+        Oversampling factor of the general acquisition path (1-64). The digital
+        filters there converge to their analog designs as ``oversample**-2``: at 16
+        the DC group delay is 0.26 % short of the analog one and the pulses lie
+        within 0.5 % of their peak from the limit (0.1 % at 32, for twice the cost);
+        pulse areas are exact at any factor.
     """
 
     sample_rate: float = 6400.0
