@@ -352,9 +352,11 @@ def record(result: SimulationResult, sensors: SensorConfig | None = None, seed: 
     and no mount resonance takes the analytic pulse path (module docstring). Any
     other chain takes the general path, at ``fs_os = oversample * sample_rate``:
 
-    1. the LO velocity is evaluated at the edges of bins centred on the oversampled
-       instants, and ``a_os = diff(v) / dt_os`` is the bin-averaged acceleration:
-       it keeps the area of every velocity jump or contact pulse exactly. For an
+    1. the LO velocity at the edges of bins centred on the oversampled instants
+       gives ``a_os = diff(v) / dt_os``, the bin-averaged acceleration: it keeps the
+       area of every velocity jump or contact pulse exactly (the motion is evaluated
+       at the samples and midpoints and interpolated between them where it is smooth,
+       evaluated at every edge elsewhere: :func:`_os_signals`). For an
        impulsive result, each jump is then shared between its two nearest instants
        in proportion to their distance (keeping its area and its centroid, so the
        impact time is not rounded to a bin) and shaped by the ``contact_duration``
