@@ -277,6 +277,10 @@ def test_hunt_crossley_restitution_is_one_minus_alpha_v_at_small_speed():
     # closed-form flights and KV contacts vs DOP853 at rtol 1e-10 over 20 periods:
     # measured 4.6e-12 s, r 8.8e-13, x 2.6e-14 m
     ("kv:k=3e7,r=0.7", [], T20, 2e-11, 5e-12, 1e-13),
+    # chatter on the left wall (r 0.2, tilted towards it): slow re-entries 0.5 ms after
+    # an exit and a 6.5 ms resting contact; measured 5.1e-13 s, r 4.1e-12, x 5.5e-16 m
+    ("right=kv:k=3e7,r=0.88 left=kv:k=3e7,r=0.2", ["inclination=-3"], 1.2, 2e-12, 2e-11,
+     1e-14),
     # closed-form flights and DOP853 contacts at rtol 1e-9 vs all-DOP853 at 1e-10: the
     # contacts' 1e-10 s error grows through the sensitive transient; over 1 s measured
     # 3.0e-7 s, r 4.4e-7, x 1.8e-9 m
@@ -284,9 +288,10 @@ def test_hunt_crossley_restitution_is_one_minus_alpha_v_at_small_speed():
     # friction: closed-form saturated flights, DOP853 (rtol 1e-9) inside the band
     # |z'| < 20 v_s and in contacts, vs all-DOP853 at 1e-10: 1.5e-10 s, r 1.4e-9, 1.2e-12 m
     ("kv:k=1e7,r=0.7", ["coulomb_friction=0.15", "inclination=2"], 0.6, 3e-10, 3e-9, 3e-12),
-], ids=["kv", "hc", "friction"])
+], ids=["kv", "chatter", "hc", "friction"])
 def test_fast_engine_matches_the_numerical_reference(spec, fx, duration, tol_t, tol_r, tol_x):
     fx = Effects.parse(fx)
+    spec = spec.split()
     res = simulate(PAPER, fx, contact=spec, settle=0.0, duration=duration)
     ref = simulate_reference(PAPER, fx, spec, settle=0.0, duration=duration)
     assert res.status == ref.status == 0

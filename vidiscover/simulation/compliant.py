@@ -371,7 +371,7 @@ class _CompliantLoop(_Loop):
             if not self._count(t):
                 return t, X, 0
             if abs(X[3]) < vb or (abs(X[3]) == vb and not self._leaving_band(t, X)):
-                t, X, k = self._ivp(t, X, 0, self._band_events(start_wall, vb),
+                t, X, k = self._ivp(t, X, 0, self._band_events(t, start_wall, vb),
                                     max_step=self.m.h * self.steps[1])
                 if k in (0, 1):
                     side = RIGHT if k == 0 else LEFT
@@ -393,11 +393,30 @@ class _CompliantLoop(_Loop):
         s = 1.0 if X[3] > 0 else -1.0
         return s * self.cm.rhs(active)(t, X)[3] > 0.0
 
-    def _band_events(self, start_wall, vb):
+    def _wall_events(self, t0, start_wall):
+        """Entry events of the two walls for a flight started at ``t0``.
+
+        The wall the flight starts on has ``z = +/-b`` at ``t0``: its event function is
+        divided by ``t - t0`` (with its sign just after ``t0`` at ``t0``), so that a
+        quick return to that wall inside the first step is a sign change, not a root
+        at the start.
+        """
         b = self.cm.b
-        ev = [_Event(lambda t, X: X[2] - b, 1.0), _Event(lambda t, X: X[2] + b, -1.0),
-              _Event(lambda t, X: X[3] - vb, 1.0), _Event(lambda t, X: X[3] + vb, -1.0)]
-        return ev
+        out = []
+        for side in (RIGHT, LEFT):
+            if side == start_wall:
+                def ev(t, X, side=side):
+                    tau = t - t0
+                    return (X[2] - side * b) / tau if tau > 0.0 else -float(side)
+            else:
+                def ev(t, X, side=side):
+                    return X[2] - side * b
+            out.append(_Event(ev, float(side)))
+        return out
+
+    def _band_events(self, t0, start_wall, vb):
+        return self._wall_events(t0, start_wall) + [
+            _Event(lambda t, X: X[3] - vb, 1.0), _Event(lambda t, X: X[3] + vb, -1.0)]
 
     def _sign_flight(self, t0, X, start_wall, vb):
         """Closed-form flight with saturated friction up to a wall or ``|z'| = vb``."""
@@ -657,13 +676,17 @@ class _CompliantLoop(_Loop):
             def ev_force(t, X):
                 d = s * X[2] - b
                 return wall.gate(d, s * X[3]) if d > 0 else -1.0
+            # steps of at most the time to get back inside (a few microseconds): the
+            # ball may come out and go back beyond the wall within one flight step
+            d0, dd0 = s * X0[2] - b, s * X0[3]
+            reach = d0 / -dd0 if dd0 < 0 else self.m.h
             te, Xe, k = self._ivp(t0, X0, 0, [_Event(ev_in, -1.0), _Event(ev_force, 1.0)],
-                                  max_step=self.m.h * self.steps[1])
+                                  max_step=min(self.m.h * self.steps[1], max(reach, 1e-9)))
             if k == 0:
                 Xe[2] = s * b
             return te, Xe, k + 1
-        events = [_Event(lambda t, X: X[2] - b, 1.0), _Event(lambda t, X: X[2] + b, -1.0)]
-        te, Xe, k = self._ivp(t0, X0, 0, events, max_step=self.m.h * self.steps[1])
+        te, Xe, k = self._ivp(t0, X0, 0, self._wall_events(t0, start_wall),
+                              max_step=self.m.h * self.steps[1])
         if k < 0:
             return te, Xe, 0
         side = RIGHT if k == 0 else LEFT
