@@ -391,7 +391,8 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         resid = a_smooth - base
 
     b = float(rec.meta.b if b is None else b)
-    n_early = fit.drop_before(pulse.delay(fs) * fs - 0.5)
+    delay = response.delay if response is not None else pulse.delay(fs)
+    n_early = fit.drop_before(delay * fs - 0.5)
     if n_early:
         warnings.append(f"{n_early} pulse(s) at the record start ignored: their contact would "
                         "begin before the first sample (the anti-alias filter's start-up)")
@@ -406,7 +407,7 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         a_smooth = smooth
         if bad.any():
             a_smooth[bad] = base[bad]
-    table = fit.table(float(rec.t[0]) - pulse.delay(fs), resid, sigma, knorm, clip, nan)
+    table = fit.table(float(rec.t[0]) - delay, resid, sigma, knorm, clip, nan)
     if table["t"].size:
         check = _alternation_check(table, base, mu, sigma)
         table["side_check"] = check

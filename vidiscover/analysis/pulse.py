@@ -275,6 +275,12 @@ class PulseResponse:
         The best model of each family tried, with its misfit (for the report).
     seconds : float
         Time spent learning (s).
+    entry_shift : float
+        Correction (s) of the model's contact entry by the models that fit about as
+        well (see :func:`learn_pulse`); :attr:`delay` includes it.
+    delay_spread : float
+        Range (s) of the delays of the models within 5 % of the least misfit: how
+        well the recording determines the delay.
     """
 
     model: PulseModel
@@ -288,11 +294,13 @@ class PulseResponse:
     pulses: np.ndarray = field(repr=False)
     candidates: tuple = field(default=(), repr=False)
     seconds: float = 0.0
+    entry_shift: float = 0.0
+    delay_spread: float = 0.0
 
     @property
     def delay(self) -> float:
-        """Time (s) from the contact entry to the pulse peak."""
-        return self.model.delay(self.sample_rate)
+        """Time (s) from the contact entry to the peak of :attr:`model`."""
+        return self.model.delay(self.sample_rate) - self.entry_shift
 
     @property
     def width(self) -> float:
@@ -306,22 +314,22 @@ class PulseResponse:
     def to_dict(self) -> dict:
         """JSON-ready summary: ``kind``, ``order``, ``cutoff_hz``, ``tau``, ``delay``, ..."""
         out = self.model.to_dict(self.sample_rate)
-        out.update({"learned": True, "width": self.width, "n_pulses": self.n_pulses,
+        out.update({"delay": self.delay, "delay_spread": self.delay_spread,
+                    "learned": True, "width": self.width, "n_pulses": self.n_pulses,
                     "misfit": self.misfit, "chi2": self.chi2, "seconds": self.seconds})
         return out
 
 
-_PRE_S, _POST_S = 1.6e-3, 5.0e-3   # window of a learning pulse about its peak (s) ...
-_PRE_MIN, _POST_MIN = 10, 32       # ... and at least these many samples
+_PRE_S, _POST_S = 1.2e-3, 3.5e-3   # window of a learning pulse about its peak (s) ...
+_PRE_MIN, _POST_MIN = 8, 24        # ... and at least these many samples
 
 
 def _window(fs: float) -> tuple[int, int]:
     """Samples before and after the peak in a learning window."""
     return max(_PRE_MIN, int(round(_PRE_S * fs))), max(_POST_MIN, int(round(_POST_S * fs)))
 _REFINE = 3                     # families refined in cut-off and contact duration
-_RES = 10                       # shift grid points per sample
-_STEP = 1.0 / _RES
-_SHIFTS = np.arange(-2 * _RES, 2 * _RES + 1) * _STEP   # about the centroid
+_RES = 10                       # shift grid points per sample at 6400 Hz ...
+_HALF = 2.0                     # ... over +/- this many samples about the centroid
 
 
 class _Objective:
@@ -335,16 +343,21 @@ class _Objective:
         self.Q = np.linalg.qr(B)[0]
         self.Y = Y - (Y @ self.Q) @ self.Q.T
         self.yy = float(np.sum(self.Y ** 2))
-        steps = np.rint(_SHIFTS / _STEP).astype(np.int64)
-        self.u0 = -pre - float(steps.max()) * _STEP
-        self.index = (np.arange(-pre, post + 1)[None, :] + pre) * _RES - steps[:, None] \
+        # shifts on a grid of 1/res sample over +/- half samples (fixed in time)
+        scale = max(1.0, fs / 6400.0)
+        self.res = res = max(1, int(round(_RES / scale)))
+        self.step = 1.0 / res
+        steps = np.arange(-int(round(_HALF * scale * res)), int(round(_HALF * scale * res)) + 1)
+        self.shifts = steps * self.step
+        self.u0 = -pre - float(steps.max()) * self.step
+        self.index = (np.arange(-pre, post + 1)[None, :] + pre) * res - steps[:, None] \
             + steps.max()
         self.nu = int(self.index.max()) + 1
 
     def templates(self, model: PulseModel) -> np.ndarray:
         ref = _origin(model, self.fs)
         # j - shift on a grid of 1/10 sample: evaluate once, index per shift
-        u = self.u0 + np.arange(self.nu) * _STEP
+        u = self.u0 + np.arange(self.nu) * self.step
         g = _response(model, u + ref, self.fs)
         K = g[self.index]
         return K - (K @ self.Q) @ self.Q.T
@@ -356,13 +369,13 @@ class _Objective:
         C = self.Y @ K.T                                  # (n, S)
         E = C ** 2 / kk[None, :]
         g = np.argmax(E, axis=1)
-        gi = np.clip(g, 1, _SHIFTS.size - 2)
+        gi = np.clip(g, 1, self.shifts.size - 2)
         rows = np.arange(g.size)
         e0, e1, e2 = E[rows, gi - 1], E[rows, gi], E[rows, gi + 1]
         den = e0 - 2 * e1 + e2
         with np.errstate(divide="ignore", invalid="ignore"):
             frac = np.where(den < 0, 0.5 * (e0 - e2) / den, 0.0)
-        shift = _SHIFTS[gi] + np.clip(frac, -1, 1) * (_SHIFTS[1] - _SHIFTS[0])
+        shift = self.shifts[gi] + np.clip(frac, -1, 1) * self.step
         amp = C[rows, g] / kk[g]
         return (self.yy - float(np.sum(E[rows, g]))) / self.yy, shift, amp
 
@@ -516,6 +529,7 @@ def learn_pulse(a: np.ndarray, fs: float, bad: np.ndarray | None = None, *,
     results = _search(obj, tuple(kinds), fs, int(halfwidth))
     best = results[0][1]
     _, shift, amp = obj.fit(best)
+    entry_shift, spread = _consensus_entry(obj, results, shift, fs)
     ref = _origin(best, fs) + (0.0 if best.causal else 0.5 * best.tau * fs)
     # aligned, normalised pulses: times from the contact entry (samples)
     tj = obj.j[None, :] - shift[:, None] + ref
@@ -543,5 +557,37 @@ def learn_pulse(a: np.ndarray, fs: float, bad: np.ndarray | None = None, *,
     return PulseResponse(model=best, sample_rate=fs, n_pulses=int(peaks.size),
                          misfit=misfit, chi2=float(chi2), template_t=tmpl_t / fs,
                          template=tmpl, pulses_t=tj / fs, pulses=P, candidates=cands,
-                         seconds=time.perf_counter() - start)
+                         seconds=time.perf_counter() - start, entry_shift=entry_shift / fs,
+                         delay_spread=spread / fs)
+
+
+def _entry(model: PulseModel, shift: np.ndarray, fs: float) -> np.ndarray:
+    """Contact entries (samples, relative to the window peaks) placed by a model's fit."""
+    tau_half = 0.0 if model.causal else 0.5 * model.tau * fs
+    return shift - _origin(model, fs) - tau_half
+
+
+def _consensus_entry(obj: _Objective, results, shift: np.ndarray, fs: float):
+    """Entry correction (samples) and delay spread over the models that fit as well.
+
+    Families that fit within a few percent of the least misfit (a Bessel filter of
+    order 4 or 8 with another contact duration, say) place the contact entry
+    differently: the shape does not decide between them. Their entries, weighted by
+    ``exp(-(misfit / least - 1) / 0.01)``, are averaged (median offset per model from
+    the best one's).
+    """
+    m0, best = results[0]
+    e0 = _entry(best, shift, fs)
+    num = den = 0.0
+    offsets = []
+    for m, model in results:
+        if m > 1.05 * m0:
+            continue
+        d = float(np.median(_entry(model, obj.fit(model)[1], fs) - e0)) if model is not best \
+            else 0.0
+        w = math.exp(-(m / m0 - 1.0) / 0.01)
+        num += w * d
+        den += w
+        offsets.append(d)
+    return num / den, float(np.ptp(offsets)) if offsets else 0.0
 
