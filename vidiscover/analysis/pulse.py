@@ -115,6 +115,11 @@ class PulseModel:
         """Centroid of the response after the contact entry (s): DC group delay + tau/2."""
         return (dc_group_delay(self.kind, self.order, self.cutoff) / fs + 0.5 * self.tau)
 
+    def response(self, t: np.ndarray, fs: float) -> np.ndarray:
+        """Response (1/s) at times ``t`` (s) from the contact entry."""
+        u = np.asarray(t, dtype=float) * fs - (0.0 if self.causal else 0.5 * self.tau * fs)
+        return _response(self, u, fs)
+
     def span(self, fs: float) -> int:
         """Half-width of the pulse support (samples) about the reference."""
         return _layout(self, float(fs))[1]
@@ -555,8 +560,9 @@ def learn_pulse(a: np.ndarray, fs: float, bad: np.ndarray | None = None, *,
                    "cutoff_hz": m.cutoff * fs, "tau": m.tau, "delay": m.delay(fs),
                    "misfit": float(v)} for v, m in results)
     return PulseResponse(model=best, sample_rate=fs, n_pulses=int(peaks.size),
-                         misfit=misfit, chi2=float(chi2), template_t=tmpl_t / fs,
-                         template=tmpl, pulses_t=tj / fs, pulses=P, candidates=cands,
+                         misfit=misfit, chi2=float(chi2), template_t=(tmpl_t - entry_shift) / fs,
+                         template=tmpl, pulses_t=(tj - entry_shift) / fs, pulses=P,
+                         candidates=cands,
                          seconds=time.perf_counter() - start, entry_shift=entry_shift / fs,
                          delay_spread=spread / fs)
 

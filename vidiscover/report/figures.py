@@ -558,3 +558,67 @@ def fig_restitution(result, truth: GroundTruth | None = None):
            + (f" ({n_excl} estimates excluded)" if n_excl else ""))
     _legend(ax)
     return fig
+
+
+@register_figure("pulse_response", "-",
+                 "Accelerometer pulse response learned from the recording: the strongest "
+                 "isolated pulses aligned at their fitted contact entry and scaled to unit "
+                 "area (grey), their super-resolved average (black) and the fitted model "
+                 "(red; kind, order, cut-off, contact duration and delay in the title).")
+def fig_pulse_response(result, truth: GroundTruth | None = None):
+    """The learned pulse response: aligned pulses, template and model.
+
+    Returns
+    -------
+    matplotlib.figure.Figure
+    """
+    fig, axes = figure(1, 1, figsize=(9, 3.2))
+    ax = axes[0, 0]
+    det = result.detection
+    resp = det.response
+    fs = det.sample_rate
+    model = det.pulse
+    if resp is not None:
+        for tp, p in zip(resp.pulses_t, resp.pulses):
+            ax.plot(tp * 1e3, p, ".", color="0.75", ms=2)
+        ax.plot(resp.template_t * 1e3, resp.template, "-", color="k", lw=1.0,
+                label=f"average of {resp.n_pulses} pulses")
+        t = np.linspace(min(resp.template_t[0], 0.0), resp.template_t[-1], 600)
+    else:
+        t = np.linspace(-model.span(fs) / fs, model.span(fs) / fs, 600)
+    delay = resp.delay if resp is not None else model.delay(fs)
+    shift = delay - model.delay(fs)           # the entry averaged over equally good models
+    ax.plot(t * 1e3, model.response(t - shift, fs), "-", color=COLOURS["right"], lw=1.2,
+            label="model" + ("" if resp is not None else " (given, not learned)"))
+    true_model = _true_pulse(truth, fs)
+    if true_model is not None:
+        ax.plot(t * 1e3, true_model.response(t, fs), "--", color=TRUTH, lw=1.0,
+                label="true response")
+    ax.axvline(0.0, color="0.5", lw=0.8, ls=":")
+    ax.axvline(delay * 1e3, color="0.5", lw=0.8, ls="--", label=f"delay {delay * 1e6:.0f} µs")
+    order = f" order {model.order}" if model.causal else ""
+    _title(ax, result, f"Pulse response: {model.kind}{order}, {model.cutoff * fs:.0f} Hz, "
+           f"contact {model.tau * 1e6:.0f} µs")
+    ax.set_xlabel("time from contact entry (ms)")
+    ax.set_ylabel("pulse per unit area (1/s)")
+    _legend(ax)
+    return fig
+
+
+def _true_pulse(truth: GroundTruth | None, fs: float):
+    """The simulated recording's pulse response (a PulseModel), or None if unknown."""
+    if truth is None:
+        return None
+    from ..analysis.pulse import PulseModel
+    from ..errors import InputError
+
+    sens = truth.sensors or {}
+    kind = sens.get("anti_alias", "linear-phase")
+    fc = sens.get("aa_cutoff")
+    cutoff = fc / fs if fc else sens.get("cutoff", 0.45)
+    try:
+        tau = float(getattr(truth.effects, "tau", 0.0) or 0.0)
+        return PulseModel(cutoff=float(cutoff), tau=tau, kind=kind,
+                          order=int(sens.get("aa_order", 0)) if kind != "linear-phase" else 0)
+    except (InputError, TypeError, ValueError):
+        return None

@@ -215,6 +215,7 @@ def render_report(summary: Mapping, *, figures: Mapping[str, bytes] | None = Non
               else fc["amplitude"] * 1e3],
              ["forcing fitted from", str(fc.get("source", _NA))],
              ["acceleration noise (m/s²)", imp.get("noise")],
+             *_pulse_rows(summary),
              ["unreliable impacts", imp.get("unreliable")],
              ["flights (stick-then-fly)", f"{(summary.get('flights') or {}).get('n', 0)} "
               f"({(summary.get('flights') or {}).get('stick', 0)})"]]
@@ -298,3 +299,19 @@ def render_index(entries: Sequence[Mapping], title: str = "vidiscover reports") 
     intro = (f"<h1>{esc(title)}</h1><p>{len(entries)} analysed recording(s); click a name "
              "for its report (figures, restitution per wall, friction sensitivity).</p>")
     return _page(title, intro + table)
+
+
+def _pulse_rows(summary: Mapping) -> list:
+    """Rows for the learned pulse response and the removed offsets."""
+    pr = summary.get("pulse_response") or {}
+    off = summary.get("offsets") or {}
+    kind = f"{pr.get('kind', _NA)}" + (f" order {pr['order']}" if pr.get("order") else "")
+    return [["pulse response" + (" (learned)" if pr.get("learned") else " (given)"), kind],
+            ["pulse cut-off (Hz)", pr.get("cutoff_hz")],
+            ["contact duration (µs)", None if pr.get("tau") is None else pr["tau"] * 1e6],
+            ["pulse delay after contact entry (µs)",
+             None if pr.get("delay") is None else pr["delay"] * 1e6],
+            ["accelerometer bias removed (m/s²)", off.get("a_bias")],
+            ["laser / base zero offsets removed (µm)",
+             f"{fmt(1e6 * off['x_offset'], 4)} / {fmt(1e6 * off['xe_offset'], 4)}"
+             if off.get("x_offset") is not None else _NA]]
