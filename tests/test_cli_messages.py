@@ -49,3 +49,21 @@ def test_train_refuses_an_unwritable_out_before_training(tmp_path, monkeypatch):
     res = CliRunner().invoke(main, ["train", "--n", "5", "--out", str(tmp_path / "m.skops")])
     assert res.exit_code == 2
     assert "Read-only file system" in res.stderr and res.stderr.count("\n") == 1
+
+
+def test_analyze_rejects_an_empty_file_before_the_heavy_imports(tmp_path):
+    import subprocess
+    import sys
+
+    (tmp_path / "empty.csv").write_text("")
+    code = ("import sys; from click.testing import CliRunner; from vidiscover.cli import main; "
+            "r = CliRunner().invoke(main, ['analyze', 'empty.csv', '--out', 'o']); "
+            "print(r.exit_code, r.stderr.strip()); "
+            "print(sorted(m for m in ('sklearn', 'matplotlib', 'scipy', 'pysindy') "
+            "if m in sys.modules))")
+    res = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True,
+                         text=True, check=True)
+    status, imported = res.stdout.splitlines()
+    assert status.startswith("2 ") and "empty file" in status
+    assert imported == "[]"
+    assert not (tmp_path / "o").exists()

@@ -53,6 +53,11 @@ def _unique_stems(paths: list[Path]) -> list[str]:
     return out
 
 
+def load_inputs(paths, meta: Path | None) -> list:
+    """Read every recording (and truth) before any work: bad input fails at once."""
+    return [_load(Path(p), meta) for p in paths]
+
+
 def _load(path: Path, meta: Path | None):
     """(Recording, truth or None) of one file; every problem is an InputError."""
     from ..io import read_recording, read_truth
@@ -96,7 +101,7 @@ def read_flight_law(path: Path) -> tuple[float, float]:
 
 def run_analyze(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
                 figures: bool = True, seed: int = 0, progress: bool = False,
-                model=None, theta_deg: float = 0.0) -> list[dict]:
+                model=None, theta_deg: float = 0.0, loaded=None) -> list[dict]:
     """Analyse recordings and write their reports (the ``analyze`` command, in-process).
 
     Parameters
@@ -122,6 +127,8 @@ def run_analyze(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
     theta_deg : float
         Inclination of the rig assumed for the flights (deg; > 0 pulls the ball
         towards the right wall).
+    loaded : list of (Recording, GroundTruth or None), optional
+        The recordings already read (by :func:`load_inputs`).
 
     Returns
     -------
@@ -134,19 +141,20 @@ def run_analyze(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
         Bad ``mu``, unreadable recording, metadata or ground truth, an output path
         that is a file. Nothing is written then.
     """
-    from tqdm.auto import tqdm
-
-    from .._atomic import atomic_directory
-    from ..analysis import analyze as analyze_recording
-    from ..report import attach_regime, write_analysis, write_index
-
     mu = _check_mu(mu)
     if not (math.isfinite(theta_deg) and abs(theta_deg) < 90):
         raise InputError(f"--theta must be in (-90, 90) degrees, was {theta_deg!r}")
     law = (mu, float(theta_deg)) if theta_deg else None
     paths = recording_paths(paths)
     out = check_out_dir(out)
-    loaded = [_load(p, meta) for p in paths]          # check every input before writing
+    if loaded is None:
+        loaded = load_inputs(paths, meta)
+    # heavy imports only once every input has been checked
+    from tqdm.auto import tqdm
+
+    from .._atomic import atomic_directory
+    from ..analysis import analyze as analyze_recording
+    from ..report import attach_regime, write_analysis, write_index
 
     def one(rec, truth, target: Path) -> dict:
         result, regime = attach_regime(analyze_recording(rec, mu=mu, seed=seed,
@@ -244,6 +252,9 @@ def analyze(recordings, out, mu, theta, flight_law, meta, model_path, no_figures
     if flight_law is not None:
         mu, theta = read_flight_law(flight_law)
     _check_mu(mu)
+    paths = recording_paths(recordings)
+    check_out_dir(out)
+    loaded = load_inputs(paths, meta)       # reject bad files before the heavy imports
     if model_path is not None:
         from ..regimes.classifier import load_model
 
@@ -252,9 +263,9 @@ def analyze(recordings, out, mu, theta, flight_law, meta, model_path, no_figures
         from ..report import default_regime_model
 
         model = default_regime_model()
-    docs = run_analyze(recordings, out, mu=mu, meta=meta, figures=not no_figures,
+    docs = run_analyze(paths, out, mu=mu, meta=meta, figures=not no_figures,
                        seed=seed, theta_deg=theta,
-                       progress=not as_json and len(recordings) > 1, model=model)
+                       progress=not as_json and len(paths) > 1, model=model, loaded=loaded)
     human = [line for d in docs for line in human_lines(d)]
     if len(docs) > 1:
         human.append(f"index: {Path(out) / 'index.html'}")
