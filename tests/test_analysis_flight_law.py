@@ -54,7 +54,7 @@ def test_discovered_law_feeds_back():
 
     effects = ("inclination=1", "coulomb_friction=0.1")
     analyses = [analyze(_rec(b, effects)[0], n_boot=0) for b in (0.006, 0.0075, 0.009)]
-    law = discover_flight_law(analyses, seed=0, n_bootstrap=20)
+    law = discover_flight_law(analyses, seed=0, n_boot=20)
     assert abs(law.mu - 0.1) <= 0.03 and abs(law.theta_deg - 1.0) <= 0.3, law.equation
     out = analyze(analyses[-1].recording, n_boot=0, flight_law=law)
     right, left = _rms(out)

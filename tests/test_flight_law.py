@@ -3,7 +3,9 @@
 Simulations: paper preset, constant r = 0.88 on both walls, settle 10 s, record
 5.12 s, default sensors. Tolerances (issue 4): the right support (which of
 friction / inclination are present, and no distractor), |mu error| <= 0.03,
-|theta error| <= 0.3 deg, no friction term when mu = 0.
+|theta error| <= 0.3 deg, no friction term when mu = 0. Issue 10: a law that
+misfits, is confounded or inadmissible is "not identified" with a reason and
+carries no numbers as results.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from vidiscover import Effects, SensorConfig, preset, record, simulate
 from vidiscover.analysis import analyze, match_impacts
 from vidiscover.discovery.flight_law import (
     DEFAULT_LIBRARY,
+    MAX_TILT_DEG,
     FlightLawResult,
     discover_flight_law,
     flight_law_mu_theta,
@@ -42,9 +45,9 @@ def _case(b: float, mu: float, theta: float, seed: int = 1, walls: str = R):
 
 
 @functools.cache
-def _pooled(mu: float, theta: float, seed: int = 1, n_bootstrap: int = 50):
+def _pooled(mu: float, theta: float, seed: int = 1, n_boot: int = 50):
     outs = [_case(b, mu, theta, seed)[0] for b in CLEARANCES]
-    return discover_flight_law(outs, seed=0, n_bootstrap=n_bootstrap)
+    return discover_flight_law(outs, seed=0, n_boot=n_boot)
 
 
 def _expected_terms(mu, theta):
@@ -52,6 +55,7 @@ def _expected_terms(mu, theta):
 
 
 def _check(res: FlightLawResult, mu, theta):
+    assert res.identified and res.reason is None, res.reason
     assert set(res.terms) == _expected_terms(mu, theta), res.equation
     assert abs(res.mu - mu) <= MU_TOL, res.equation
     assert abs(res.theta_deg - theta) <= THETA_TOL, res.equation
@@ -72,6 +76,18 @@ def test_pooled_clearances_recover_support_and_values(mu, theta):
     assert res.n_flights > 200 and res.n_equations > 200
 
 
+def _assert_no_numbers(res: FlightLawResult):
+    """Not identified: a reason, and no mu, theta, terms or intervals as results."""
+    assert not res.identified and res.reason and "\n" not in res.reason
+    d = json.loads(json.dumps(res.to_dict()))
+    assert d["identified"] is False and d["reason"] == res.reason
+    assert d["mu"] is None and d["theta_deg"] is None and d["terms"] == []
+    assert d["mu_ci"] == [None, None] and d["theta_ci"] == [None, None]
+    assert d["equation"] == "not identified"
+    with pytest.raises(InputError, match="not identified"):
+        flight_law_mu_theta(res)
+
+
 def _launch_error(out, truth, law) -> float:
     """RMS error (m/s) of the ball launch velocities re-solved with ``law``."""
     t_true, w_true = truth.impacts.t, truth.impacts.w_plus
@@ -88,18 +104,21 @@ def _launch_error(out, truth, law) -> float:
 def test_single_recording_at_9mm_is_right_or_says_it_is_confounded(mu, theta):
     """At b = 9 mm the orbit is period-1 with two impacts per cycle: every tent sees
     the same pair of flights, so only one combination of mu and theta is determined.
-    The result must then say so (warning, no intervals), and the combination it
-    found must still reconstruct the true ball velocities; without the warning it
-    must meet the tolerances."""
+    The result must then say so (not identified, no numbers); the combination kept
+    as a diagnostic still removes at least half of the launch-velocity error of
+    straight flights (measured: 20-44 % left) or is below 1 mm/s; otherwise it must
+    meet the tolerances."""
     out, truth = _case(0.009, mu, theta)
-    res = discover_flight_law([out], n_bootstrap=100)
-    if mu == 0 and theta == 0:
-        assert res.terms == [], res.equation        # nothing to explain
+    res = discover_flight_law([out], n_boot=100)
     if res.collinearity > 0.99:
-        assert any("confounded" in w for w in res.warnings)
-        assert res.to_dict()["mu_ci"] == [None, None]
-        assert _launch_error(out, truth, res) < 0.01
+        _assert_no_numbers(res)
+        assert "confounded" in res.reason
+        diag = res.diagnostic
+        combo = _launch_error(out, truth, (max(diag["mu"], 0.0), diag["theta_deg"]))
+        assert combo <= max(0.5 * _launch_error(out, truth, (0.0, 0.0)), 1e-3)   # m/s
     else:
+        if mu == 0 and theta == 0:
+            assert res.terms == [], res.equation        # nothing to explain
         _check(res, mu, theta)
 
 
@@ -107,7 +126,7 @@ def test_feedback_into_reconstruction_matches_true_ball_velocities():
     """Flights re-solved with the identified law give the true launch velocities;
     the straight-line (mu = 0) reconstruction does not."""
     mu, theta = 0.3, 1.0
-    res = discover_flight_law([_case(b, mu, theta)[0] for b in CLEARANCES], n_bootstrap=0)
+    res = discover_flight_law([_case(b, mu, theta)[0] for b in CLEARANCES], n_boot=0)
     m, th = flight_law_mu_theta(res)
     assert abs(m - mu) <= MU_TOL and abs(th - theta) <= THETA_TOL
     out, truth = _case(0.009, mu, theta)
@@ -123,9 +142,11 @@ def test_paper_walls_with_chatter_are_flagged_not_trusted():
     break. The result must say so instead of passing for a law."""
     outs = [_case(b, 0.1, 1.0, walls="asymmetric_restitution=0.88,0.20")[0]
             for b in CLEARANCES]
-    res = discover_flight_law(outs, n_bootstrap=0, max_iter=3)
+    res = discover_flight_law(outs, n_boot=0, max_iter=3)
     assert res.misfit > 0.01
-    assert any("does not hold" in w for w in res.warnings)
+    _assert_no_numbers(res)
+    assert "weak form does not hold" in res.reason
+    assert res.to_dict()["diagnostic_fit"]["terms"]          # the raw fit is kept apart
     clean = _pooled(0.1, 1.0)
     assert clean.misfit < 0.005                      # ~0.1 %: pulse-area precision
 
@@ -133,11 +154,14 @@ def test_paper_walls_with_chatter_are_flagged_not_trusted():
 def test_result_contract_and_determinism():
     res = _pooled(0.1, 1.0)
     again = discover_flight_law([_case(b, 0.1, 1.0)[0] for b in CLEARANCES], seed=0,
-                                n_bootstrap=50)
+                                n_boot=50)
     assert again.to_dict() == res.to_dict()
     d = json.loads(json.dumps(res.to_dict()))
-    for key in ("mu", "theta_deg", "terms", "equation", "mu_ci", "theta_ci", "n_flights"):
+    for key in ("mu", "theta_deg", "terms", "equation", "mu_ci", "theta_ci", "n_flights",
+                "identified", "reason", "diagnostic_fit", "level"):
         assert key in d
+    assert d["identified"] is True and d["reason"] is None
+    assert d["diagnostic_fit"]["mu"] == d["mu"]
     assert d["terms"] == res.terms and len(d["mu_ci"]) == 2
     assert res.equation.startswith("y'' = ")
     # the equation is the kept terms with their coefficients (3 significant digits)
@@ -158,12 +182,27 @@ def test_bad_input_errors():
         discover_flight_law([out], library=("1", "sgn(z')", "drag"))
     with pytest.raises(InputError, match="library must contain '1'"):
         discover_flight_law([out], library=("sgn(z')", "z'"))
-    with pytest.raises(InputError, match="n_bootstrap must be"):
-        discover_flight_law([out], n_bootstrap=-1)
+    with pytest.raises(InputError, match="n_boot must be"):
+        discover_flight_law([out], n_boot=-1)
+    with pytest.raises(InputError, match="max_tilt_deg must be"):
+        discover_flight_law([out], max_tilt_deg=0)
     with pytest.raises(InputError, match="max_terms must be"):
         discover_flight_law([out], max_terms=1)
     with pytest.raises(InputError, match="FlightLawResult"):
         flight_law_mu_theta((0.1, 0.0))
+
+
+def test_tilt_beyond_the_admissible_bound_is_not_a_result():
+    """theta = 2 deg pooled, with the admissible tilt narrowed to 1 deg: the fit is
+    inadmissible, so no numbers; the default bound (10 deg) identifies it."""
+    outs = [_case(b, 0.0, 2.0)[0] for b in CLEARANCES]
+    narrow = discover_flight_law(outs, n_boot=0, max_tilt_deg=1.0)
+    _assert_no_numbers(narrow)
+    assert "inadmissible inclination" in narrow.reason and "--max-tilt" in narrow.reason
+    assert abs(narrow.diagnostic["theta_deg"] - 2.0) <= THETA_TOL
+    wide = discover_flight_law(outs, n_boot=0)
+    assert wide.identified and wide.max_tilt_deg == MAX_TILT_DEG == 10.0
+    _check(wide, 0.0, 2.0)
 
 
 @pytest.mark.slow
@@ -174,7 +213,7 @@ def test_full_grid_pooled(seed):
     for mu in (0.0, 0.1, 0.3):
         for theta in (0.0, 1.0, 2.0):
             res = discover_flight_law([_case(b, mu, theta, seed)[0] for b in CLEARANCES],
-                                      n_bootstrap=0)
+                                      n_boot=0)
             rights += set(res.terms) == _expected_terms(mu, theta)
             assert abs(res.mu - mu) <= MU_TOL and abs(res.theta_deg - theta) <= THETA_TOL
             if mu == 0:

@@ -6,8 +6,11 @@ atomically (bad input leaves nothing behind):
 
 * ``discovery.json`` -- the summary (DESIGN.md section 6 keys ``flight.mu``,
   ``flight.theta_deg``, ``flight.terms``, ``impact_law.right.formula``,
-  ``impact_law.left.formula``, and the intervals, candidate tables, comparison
-  with a constant r, warnings);
+  ``impact_law.left.formula``; ``flight.identified`` and ``flight.reason``, with
+  ``flight.mu``/``theta_deg`` null when the law is not identified and the raw fit
+  under ``flight.diagnostic_fit``; per wall ``terms``, ``coefficients``,
+  ``speed_range``, ``effect``, ``effect_threshold``, ``band``, the candidate
+  tables, the comparison with a constant r, warnings);
 * ``equations.txt`` -- the discovered laws as text;
 * ``impacts.csv`` -- the pooled impacts used per wall (speed, r, standard error);
 * ``candidates_right.csv``, ``candidates_left.csv`` -- every impact-law candidate
@@ -32,8 +35,9 @@ __all__ = ["discover", "run_discover", "human_lines"]
 
 
 def run_discover(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
-                 seed: int = 0, n_bootstrap: int = 200, criterion: str = "aicc",
-                 min_effect: float = 0.0, flight: bool = True, figures: bool = True,
+                 seed: int = 0, n_boot: int = 200, level: float = 0.95,
+                 criterion: str = "aicc", min_effect: float | None = None,
+                 max_tilt: float = 10.0, flight: bool = True, figures: bool = True,
                  progress: bool = False) -> dict:
     """Discover the laws of pooled recordings and write the results (in-process CLI).
 
@@ -49,12 +53,18 @@ def run_discover(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
         Metadata JSON for every recording (default: each recording's sidecar).
     seed : int
         Seed of the bootstraps and cross-validation splits.
-    n_bootstrap : int
-        Bootstrap resamples of the impact laws.
+    n_boot : int
+        Bootstrap resamples of the flight and impact laws.
+    level : float
+        Level of the intervals and bands, in (0, 1).
     criterion : {"aicc", "cv"}
         Impact-law selection rule.
-    min_effect : float
-        Practical tolerance on r of the impact-law selection (0: off).
+    min_effect : float, optional
+        Smallest change of r over the observed speeds for a reported speed
+        dependence (default: the calibrated
+        :data:`~vidiscover.discovery.impact_law.MIN_EFFECT`).
+    max_tilt : float
+        Largest admissible |theta| of the flight law (deg).
     flight : bool
         Run the flight-law discovery.
     figures : bool
@@ -82,18 +92,26 @@ def run_discover(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
     if not (math.isfinite(mu) and 0.0 <= mu <= 2.0):
         raise InputError(f"--mu must be in [0, 2] (friction coefficient between ball "
                          f"and LO), was {mu!r}")
-    if n_bootstrap < 0:
-        raise InputError(f"--n-bootstrap must be >= 0, was {n_bootstrap}")
+    from ..discovery.impact_law import MIN_EFFECT
+
+    if n_boot < 0:
+        raise InputError(f"--n-boot must be >= 0, was {n_boot}")
+    if not (math.isfinite(level) and 0.0 < level < 1.0):
+        raise InputError(f"--level must be in (0, 1), e.g. 0.95, was {level!r}")
+    min_effect = MIN_EFFECT if min_effect is None else min_effect
     if not (math.isfinite(min_effect) and min_effect >= 0):
-        raise InputError(f"--min-effect must be >= 0 (tolerance on r), was {min_effect!r}")
+        raise InputError(f"--min-effect must be >= 0 (smallest change of r), "
+                         f"was {min_effect!r}")
+    if not (math.isfinite(max_tilt) and 0.0 < max_tilt < 90.0):
+        raise InputError(f"--max-tilt must be in (0, 90) degrees, was {max_tilt!r}")
     if seed < 0:
         raise InputError(f"--seed must be >= 0, was {seed}")
     paths = recording_paths(paths)
     out = check_out_dir(out)
     recordings = [read_recording(p, meta=meta) for p in paths]   # check all inputs first
-    result = discover_laws(recordings, mu=mu, seed=seed, n_bootstrap=n_bootstrap,
+    result = discover_laws(recordings, mu=mu, seed=seed, n_boot=n_boot, level=level,
                            criterion=criterion, flight=flight, progress=progress,
-                           impact_kws={"min_effect": float(min_effect)})
+                           min_effect=float(min_effect), max_tilt_deg=float(max_tilt))
     doc = result.summary()
     files = ["discovery.json", "equations.txt", "impacts.csv", "candidates_right.csv",
              "candidates_left.csv", "flight_residuals.csv"]
@@ -124,7 +142,7 @@ def human_lines(doc: dict) -> list[str]:
              f"{doc['mu_assumed']:g}"]
     lines += ["  " + e for e in doc["equations"]]
     fl = doc["flight"]
-    if fl is not None:
+    if fl.get("identified"):
         lines.append(f"  flight: mu = {_fmt(fl['mu'], '.4g')} "
                      f"[{_fmt(fl['mu_ci'][0])}, {_fmt(fl['mu_ci'][1])}], theta = "
                      f"{_fmt(fl['theta_deg'], '.4g')} deg [{_fmt(fl['theta_ci'][0])}, "
@@ -156,19 +174,23 @@ def human_lines(doc: dict) -> list[str]:
               help="Metadata JSON for every recording, if not beside it (rec.json).")
 @click.option("--seed", type=int, default=0, show_default=True,
               help="Seed of the bootstraps and cross-validation splits.")
-@click.option("--n-bootstrap", type=int, default=200, show_default=True,
-              help="Bootstrap resamples of the impact laws.")
+@click.option("--n-boot", type=int, default=200, show_default=True,
+              help="Bootstrap resamples of the flight and impact laws.")
+@click.option("--level", type=float, default=0.95, show_default=True,
+              help="Level of the intervals and bands.")
 @click.option("--criterion", type=click.Choice(["aicc", "cv"]), default="aicc",
               show_default=True, help="Impact-law selection: AICc window or CV one-SE rule.")
-@click.option("--min-effect", type=float, default=0.0, show_default=True,
-              help="Practical tolerance on r: a sparser law whose curve stays this close "
-                   "to the best one is adequate (0: AICc alone decides).")
+@click.option("--min-effect", type=float, default=None,
+              help="Smallest change of r over the observed speeds for a reported speed "
+                   "dependence [default: 0.006, calibrated on constant-r data].")
+@click.option("--max-tilt", type=float, default=10.0, show_default=True,
+              help="Largest admissible |theta| of the flight law (deg).")
 @click.option("--no-flight", is_flag=True, help="Skip the flight-law discovery.")
 @click.option("--no-figures", is_flag=True, help="Skip the figures (faster).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document.")
 @handle_errors
-def discover(recordings, out, mu, meta, seed, n_bootstrap, criterion, min_effect, no_flight,
-             no_figures, as_json):
+def discover(recordings, out, mu, meta, seed, n_boot, level, criterion, min_effect, max_tilt,
+             no_flight, no_figures, as_json):
     """Discover the flight law and the impact law per wall from pooled recordings.
 
     RECORDINGS are CSV/Parquet/NPZ files with columns t, x, a, xe and a metadata
@@ -176,7 +198,8 @@ def discover(recordings, out, mu, meta, seed, n_bootstrap, criterion, min_effect
     impact speeds span a range. Writes discovery.json, equations.txt, CSV tables
     and figures/ into --out.
     """
-    doc = run_discover(recordings, out, mu=mu, meta=meta, seed=seed, n_bootstrap=n_bootstrap,
-                       criterion=criterion, min_effect=min_effect, flight=not no_flight,
-                       figures=not no_figures, progress=not as_json and len(recordings) > 1)
+    doc = run_discover(recordings, out, mu=mu, meta=meta, seed=seed, n_boot=n_boot,
+                       level=level, criterion=criterion, min_effect=min_effect,
+                       max_tilt=max_tilt, flight=not no_flight, figures=not no_figures,
+                       progress=not as_json and len(recordings) > 1)
     emit(as_json, doc, "\n".join(human_lines(doc)))

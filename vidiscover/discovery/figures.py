@@ -88,7 +88,8 @@ def plot_flight_residuals(result: DiscoveryResult, path: Path | None = None):
     def rms(x):
         return float(np.sqrt(np.mean(x ** 2))) if x.size else float("nan")
 
-    label_after = ("after: " + result.flight.equation if result.flight is not None
+    label_after = ("after: " + result.flight.equation
+                   if result.flight is not None and result.flight.identified
                    else "after: no flight law identified")
     ax_t.plot(res["t"], before, ".", ms=3, color="0.6", label=f"before (RMS {rms(before):.3g})")
     ax_t.plot(res["t"], after, ".", ms=3, color="C0", label=f"after (RMS {rms(after):.3g})")

@@ -69,7 +69,7 @@ Examples
 >>> fx = Effects.parse(["coulomb_friction=0.3", "asymmetric_restitution=0.88,0.88"])
 >>> outs = [analyze(record(simulate(preset("paper", b=b), fx, settle=10.0))[0], n_boot=10)
 ...         for b in (0.006, 0.0075, 0.009)]
->>> res = discover_flight_law(outs, n_bootstrap=50)
+>>> res = discover_flight_law(outs, n_boot=50)
 >>> res.terms, abs(res.mu - 0.3) < 0.03
 (["sgn(z')"], True)
 """
@@ -85,8 +85,17 @@ import numpy as np
 from ..analysis.friction import solve_flights
 from ..errors import InputError
 from ..params import G_ACCEL
+from .sparse import (
+    aicc,
+    bootstrap_rows,
+    inclusion,
+    library_matrix,
+    percentile_interval,
+    threshold_sweep,
+)
 
-__all__ = ["FLIGHT_TERMS", "DEFAULT_LIBRARY", "FlightLawResult", "discover_flight_law",
+__all__ = ["FLIGHT_TERMS", "DEFAULT_LIBRARY", "MAX_TILT_DEG", "FlightLawResult",
+           "discover_flight_law",
            "flight_law_mu_theta", "reconstruct_flights", "reconstruct_with_law"]
 
 #: Candidate functions of the relative velocity z' (m/s), by name.
@@ -113,29 +122,39 @@ _STARTS = ((0.0, 0.0), (0.3, 2.0), (0.3, -2.0))
 _AMBIGUOUS = (0.02, 0.2)    # fixed points further apart than this (mu, deg) are rivals
 _COLLINEAR = 0.99           # cosine above which mu and theta are confounded
 _TOL_MU, _TOL_THETA = 5e-4, 5e-3   # fixed point reached (mu, deg)
+#: Largest admissible |theta| (deg) unless the caller widens it (DESIGN.md section 9).
+MAX_TILT_DEG = 10.0
 
 
 # ------------------------------------------------------------------------ result
 @dataclass(frozen=True)
 class FlightLawResult:
-    """Identified flight law ``y'' = sum_k coefficients[k] * terms[k]`` (m/s^2).
+    """Flight law ``y'' = sum_k coefficients[k] * terms[k]`` (m/s^2), or "not identified".
+
+    Only an identified law carries numbers as results. When the weak form misfits,
+    mu and theta are confounded, or a value is physically inadmissible (mu < 0,
+    |theta| above the admissible tilt), ``identified`` is False, ``reason`` says why
+    in one line, ``mu``/``theta_deg`` and the intervals are NaN, ``terms`` and
+    ``coefficients`` are empty, and the raw fit is kept in ``diagnostic`` only.
 
     Attributes
     ----------
     mu : float
-        Friction coefficient, ``-c_sgn / g`` (0 when ``sgn(z')`` is not kept).
+        Friction coefficient, ``-c_sgn / g`` (0 when ``sgn(z')`` is not kept; NaN
+        when not identified).
     theta_deg : float
-        Inclination (deg), ``asin(c_1 / g)`` (0 when the constant is not kept).
+        Inclination (deg), ``asin(c_1 / g)`` (0 when the constant is not kept; NaN
+        when not identified).
     terms : list of str
         Names of the kept terms (:data:`FLIGHT_TERMS`).
     coefficients : list of float
         Their coefficients (SI units: y'' in m/s^2, z' in m/s).
     mu_ci, theta_ci : tuple of float
-        Bootstrap percentile intervals (``confidence`` level), widened to include
-        rival fixed points (see ``warnings``); NaN when mu and theta are confounded
-        or no bootstrap was asked for.
+        Bootstrap percentile intervals (``level``), widened to include rival fixed
+        points; NaN when not identified or no bootstrap was asked for.
     equation : str
-        The law as text, e.g. ``"y'' = -2.94 sgn(z') + 0.171"``.
+        The law as text, e.g. ``"y'' = -2.94 sgn(z') + 0.171"``, or
+        ``"not identified"``.
     n_flights : int
         Flights used (in at least one tent).
     n_equations : int
@@ -146,7 +165,7 @@ class FlightLawResult:
         Share of bootstrap resamples keeping each candidate.
     threshold : float
         STLSQ threshold (m/s^2 of typical contribution).
-    confidence : float
+    level : float
         Level of the intervals.
     iterations : int
         Passes of reconstruction + regression done.
@@ -159,9 +178,19 @@ class FlightLawResult:
         recording cannot tell friction from inclination; pool clearances).
     misfit : float
         RMS residual over RMS ball velocity jump ``(m1/m2) |dv|`` of the tents. The
-        pulse areas give the jumps to ~0.1 %; above 1 % a warning says the weak form
-        does not hold (e.g. unseen re-impacts when the ball chatters on a weak wall).
+        pulse areas give the jumps to ~0.1 %; above 1 % the weak form does not hold
+        (e.g. unseen re-impacts when the ball chatters on a weak wall).
     warnings : tuple of str
+    identified : bool
+        Whether the law is a result (admissible, not confounded, weak form holds).
+    reason : str or None
+        Why not identified (one line), else None.
+    max_tilt_deg : float
+        Largest admissible |theta| (deg).
+    diagnostic : dict
+        The raw fit (``mu``, ``theta_deg``, ``terms``, ``coefficients``,
+        ``equation``, ``mu_ci``, ``theta_ci``) whether identified or not; not a
+        result when ``identified`` is False.
     """
 
     mu: float
@@ -176,12 +205,16 @@ class FlightLawResult:
     library: tuple
     inclusion: dict = field(default_factory=dict)
     threshold: float = 0.0
-    confidence: float = 0.95
+    level: float = 0.95
     iterations: int = 0
     residual_rms: float = float("nan")
     collinearity: float = float("nan")
     misfit: float = float("nan")
     warnings: tuple = ()
+    identified: bool = True
+    reason: str | None = None
+    max_tilt_deg: float = MAX_TILT_DEG
+    diagnostic: dict = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         if len(self.terms) != len(self.coefficients):
@@ -191,6 +224,12 @@ class FlightLawResult:
             if len(getattr(self, name)) != 2:
                 raise ValueError(f"{name} must be a (low, high) pair, was "
                                  f"{getattr(self, name)!r}")
+        if self.identified == bool(self.reason):
+            raise ValueError("a law is identified without a reason, or not identified "
+                             "with one")
+        if not self.identified and (self.terms or math.isfinite(self.mu)
+                                    or math.isfinite(self.theta_deg)):
+            raise ValueError("a law that is not identified carries no mu, theta or terms")
 
     @property
     def friction(self) -> bool:
@@ -205,10 +244,14 @@ class FlightLawResult:
     def to_dict(self) -> dict:
         """JSON-ready dict.
 
-        Keys ``mu``, ``theta_deg``, ``terms``, ``coefficients``, ``equation``,
-        ``mu_ci``, ``theta_ci``, ``n_flights`` and the diagnostics.
+        Keys ``identified``, ``reason``, ``mu``, ``theta_deg``, ``terms``,
+        ``coefficients``, ``equation``, ``mu_ci``, ``theta_ci``, ``n_flights``,
+        ``diagnostic_fit`` (the raw fit, not a result when not identified) and the
+        diagnostics. ``mu``/``theta_deg`` are None when not identified.
         """
-        return {"mu": float(self.mu), "theta_deg": float(self.theta_deg),
+        diag = self.diagnostic
+        return {"identified": bool(self.identified), "reason": self.reason,
+                "mu": _num(self.mu), "theta_deg": _num(self.theta_deg),
                 "terms": list(self.terms),
                 "coefficients": [float(c) for c in self.coefficients],
                 "equation": self.equation, "mu_ci": [_num(v) for v in self.mu_ci],
@@ -216,12 +259,22 @@ class FlightLawResult:
                 "n_flights": int(self.n_flights), "n_equations": int(self.n_equations),
                 "library": list(self.library),
                 "inclusion": {k: float(v) for k, v in self.inclusion.items()},
-                "threshold": float(self.threshold), "confidence": float(self.confidence),
+                "threshold": float(self.threshold), "level": float(self.level),
+                "max_tilt_deg": float(self.max_tilt_deg),
                 "iterations": int(self.iterations),
                 "residual_rms": _num(self.residual_rms),
                 "collinearity": _num(self.collinearity),
                 "misfit": _num(self.misfit),
-                "warnings": list(self.warnings)}
+                "warnings": list(self.warnings),
+                "diagnostic_fit": {
+                    "mu": _num(diag.get("mu", math.nan)),
+                    "theta_deg": _num(diag.get("theta_deg", math.nan)),
+                    "terms": list(diag.get("terms", [])),
+                    "coefficients": [float(c) for c in diag.get("coefficients", [])],
+                    "equation": diag.get("equation", ""),
+                    "mu_ci": [_num(v) for v in diag.get("mu_ci", (math.nan, math.nan))],
+                    "theta_ci": [_num(v) for v in diag.get("theta_ci",
+                                                           (math.nan, math.nan))]}}
 
 
 def _num(v):
@@ -243,10 +296,18 @@ def flight_law_mu_theta(result: FlightLawResult) -> tuple[float, float]:
         Friction coefficient (>= 0).
     theta_deg : float
         Inclination (deg).
+
+    Raises
+    ------
+    InputError
+        When ``result`` is not a FlightLawResult or the law was not identified.
     """
     if not isinstance(result, FlightLawResult):
         raise InputError(f"flight_law must be a FlightLawResult from discover_flight_law, "
                          f"was {type(result).__name__}")
+    if not result.identified:
+        raise InputError(f"flight law not identified ({result.reason}); analyse with an "
+                         "assumed mu instead, or pool recordings at several clearances")
     return max(float(result.mu), 0.0), float(result.theta_deg)
 
 
@@ -408,28 +469,6 @@ def reconstruct_with_law(analysis, law) -> dict:
 
 
 # ------------------------------------------------------------------ regression
-def _one_arg(f):
-    """A one-argument wrapper (pysindy reads the arity from ``__code__``)."""
-    def g(x):
-        return f(x)
-    return g
-
-
-def _library(names):
-    """A pysindy CustomLibrary over z' with the named candidates (constant first)."""
-    import pysindy as ps
-
-    funcs, fnames = [], []
-    for nm in names:
-        if nm == _CONSTANT:
-            continue
-        funcs.append(_one_arg(FLIGHT_TERMS[nm]))
-        fnames.append(_one_arg(lambda x, nm=nm: nm.replace("z'", x)))
-    lib = ps.CustomLibrary(library_functions=funcs, function_names=fnames,
-                           include_bias=_CONSTANT in names)
-    return lib
-
-
 class _Tents:
     """Rows of the weak form, one per usable impact, across recordings."""
 
@@ -437,10 +476,6 @@ class _Tents:
         self.records = records
         self.steps = int(steps)
         self.library = library
-        self.lib = _library(library)
-        self.lib.fit(np.zeros((2, 1)))
-        got = self.lib.get_feature_names(["z'"])
-        self.order = [got.index(nm) for nm in library]
         rows = []
         for r, rec in enumerate(records):
             free = rec.kind == "free"
@@ -486,7 +521,8 @@ class _Tents:
             F, M1 = zd.shape
             moving = zd != 0.0
             changes += int((np.diff(np.sign(zd), axis=1) != 0).any(axis=1).sum())
-            L = np.asarray(self.lib.transform(zd.reshape(-1, 1)))[:, self.order].reshape(F, M1, J)
+            L = library_matrix(zd.reshape(-1), self.library, FLIGHT_TERMS,
+                               variable="z'").reshape(F, M1, J)
             L = L * moving[:, :, None]
             frac = np.linspace(0.0, 1.0, M1)
             h = (rec.te[ks] - rec.ts[ks]) / (M1 - 1)
@@ -515,22 +551,10 @@ class _Tents:
 
 def _sweep_supports(Theta, Y, scales, threshold, n_thresholds=_N_THRESHOLDS):
     """Supports visited by a pysindy STLSQ threshold sweep (columns scaled to m/s^2)."""
-    import warnings
-
-    import pysindy as ps
-
     X = Theta / scales[None, :]
     full = np.linalg.lstsq(X, Y, rcond=None)[0]
     top = max(float(np.max(np.abs(full))), threshold) * 1.01
-    out = set()
-    for thr in np.geomspace(threshold, top, n_thresholds):
-        opt = ps.STLSQ(threshold=float(thr), alpha=1e-10, max_iter=50,
-                       normalize_columns=False)
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore", UserWarning)
-            opt.fit(X, Y)
-        out.add(tuple(np.flatnonzero(np.asarray(opt.coef_).reshape(-1) != 0).tolist()))
-    return out
+    return threshold_sweep(X, Y, np.geomspace(threshold, top, n_thresholds))
 
 
 def _candidates(library, sweep, max_terms):
@@ -563,19 +587,17 @@ def _select(Theta, Y, scales, cands, threshold, window):
     best = []
     for ci, c in enumerate(cands):
         k = len(c)
-        if n - k - 1 <= 0:
+        if n - k - 2 <= 0:
             continue
         coef = np.zeros(J)
         if k:
             coef[list(c)] = np.linalg.lstsq(Theta[:, list(c)], Y, rcond=None)[0]
             if np.any(np.abs(coef[list(c)]) * scales[list(c)] < threshold):
                 continue                      # a negligible term: the sparser form covers it
-        rss = max(float(np.sum((Y - Theta @ coef) ** 2)), 1e-300)
-        aicc = n * math.log(rss / n) + 2 * k + 2 * k * (k + 1) / (n - k - 1)
-        best.append((aicc, k, ci, coef))
+        best.append((aicc(float(np.sum((Y - Theta @ coef) ** 2)), n, k), k, ci, coef))
     low = min(b[0] for b in best)
     ok = [b for b in best if b[0] <= low + window]
-    aicc, k, ci, coef = min(ok, key=lambda b: (b[1], b[0]))
+    _, _, ci, coef = min(ok, key=lambda b: (b[1], b[0]))
     return coef, ci
 
 
@@ -609,10 +631,11 @@ def _mu_theta(names, coef):
     return float(mu), float(np.degrees(np.arcsin(s)))
 
 
-def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_bootstrap: int = 200,
+def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
                         library: Sequence[str] = DEFAULT_LIBRARY, threshold: float = 0.06,
-                        window: float = 4.0, max_terms: int = 3, confidence: float = 0.95,
-                        max_iter: int = _MAX_ITER) -> FlightLawResult:
+                        window: float = 4.0, max_terms: int = 3, level: float = 0.95,
+                        max_iter: int = _MAX_ITER,
+                        max_tilt_deg: float = MAX_TILT_DEG) -> FlightLawResult:
     """Identify the ball's law between impacts from analysed recordings.
 
     Parameters
@@ -622,7 +645,7 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_bootstrap: int =
         recordings of the same rig (their tents are pooled).
     seed : int
         Seed of the bootstrap.
-    n_bootstrap : int
+    n_boot : int
         Resamples of the tents for the intervals (0: no intervals).
     library : sequence of str
         Candidate terms, names of :data:`FLIGHT_TERMS`; must contain ``"1"`` and
@@ -636,14 +659,22 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_bootstrap: int =
         Largest number of terms of a candidate law (>= 2). Over the speeds of a
         flight the odd candidates are nearly collinear with ``sgn(z')``; dense
         supports with cancelling coefficients fit noise and are not considered.
-    confidence : float
+    level : float
         Level of the bootstrap intervals.
     max_iter : int
         Largest number of reconstruction + regression passes.
+    max_tilt_deg : float
+        Largest admissible |theta| (deg, default 10); a larger fitted tilt makes
+        the law "not identified".
 
     Returns
     -------
     FlightLawResult
+        ``identified`` False, with a one-line ``reason`` and no numbers as results,
+        when the weak form misfits (> 1 % of the ball velocity jumps), friction and
+        inclination are confounded (collinear columns, or rival fixed points that
+        close the tents about as well), or the fit is inadmissible (mu < 0,
+        |theta| > ``max_tilt_deg``).
 
     Raises
     ------
@@ -654,9 +685,9 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_bootstrap: int =
     -----
     Validated (``tests/test_flight_law.py``, ``benchmarks/bench_flight_law.py``) on
     simulated recordings with constant r = 0.88 and the three clearances 6, 7.5 and
-    9 mm pooled. One recording alone can be confounded (periodic orbit, warned) or,
-    at b = 7.5 mm, biased without a warning; walls on which the ball chatters with
-    undetectable re-impacts break the weak form (warned through ``misfit``).
+    9 mm pooled. One recording alone is often confounded (periodic orbit: not
+    identified) or, at b = 7.5 mm, biased without a warning; walls on which the
+    ball chatters with undetectable re-impacts break the weak form (not identified).
     """
     if isinstance(analyses, (str, bytes)) or not isinstance(analyses, Sequence):
         analyses = [analyses]
@@ -673,18 +704,20 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_bootstrap: int =
                              f"was {list(library)}")
     if len(set(library)) != len(library):
         raise InputError(f"library has repeated terms: {list(library)}")
-    if not (isinstance(n_bootstrap, int) and n_bootstrap >= 0):
-        raise InputError(f"n_bootstrap must be an integer >= 0, was {n_bootstrap!r}")
+    if not (isinstance(n_boot, int) and n_boot >= 0):
+        raise InputError(f"n_boot must be an integer >= 0, was {n_boot!r}")
     if not (math.isfinite(threshold) and threshold > 0):
         raise InputError(f"threshold must be > 0 m/s^2, was {threshold!r}")
     if not (isinstance(max_terms, int) and max_terms >= 2):
         raise InputError(f"max_terms must be an integer >= 2, was {max_terms!r}")
     if not (math.isfinite(window) and window >= 0):
         raise InputError(f"window must be >= 0 (AICc units), was {window!r}")
-    if not (0 < confidence < 1):
-        raise InputError(f"confidence must be in (0, 1), was {confidence!r}")
+    if not (0 < level < 1):
+        raise InputError(f"level must be in (0, 1), was {level!r}")
     if not (isinstance(max_iter, int) and max_iter >= 1):
         raise InputError(f"max_iter must be an integer >= 1, was {max_iter!r}")
+    if not (isinstance(max_tilt_deg, (int, float)) and 0 < max_tilt_deg < 90):
+        raise InputError(f"max_tilt_deg must be in (0, 90) degrees, was {max_tilt_deg!r}")
     records = [_Record(a) for a in analyses]
     tents = _Tents(records, library)
     if tents.n < len(library) + 5:
@@ -720,51 +753,61 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_bootstrap: int =
     resid = Y - Theta @ coef
     kept = [nm for nm, c in zip(library, coef, strict=True) if c != 0]
     kc = [float(c) for c in coef if c != 0]
+    mu = mu if _FRICTION in kept else 0.0
+    theta = theta if _CONSTANT in kept else 0.0
 
     mu_ci = theta_ci = (math.nan, math.nan)
-    inclusion = {}
-    if n_bootstrap > 0:
-        rng = np.random.default_rng(seed)
-        boots = np.zeros((n_bootstrap, len(library)))
-        for k in range(n_bootstrap):
-            idx = rng.integers(0, tents.n, tents.n)
-            boots[k] = _select(Theta[idx], Y[idx], scales, cands, threshold, window)[0]
+    incl = {}
+    if n_boot > 0:
+        boots = np.array([_select(Theta[idx], Y[idx], scales, cands, threshold, window)[0]
+                          for idx in bootstrap_rows(tents.n, n_boot, seed)])
         mus = -boots[:, jf] / G_ACCEL
         ths = np.degrees(np.arcsin(np.clip(boots[:, jc] / G_ACCEL, -1, 1)))
-        q = [(1 - confidence) / 2 * 100, (1 + confidence) / 2 * 100]
-        mu_ci = tuple(float(v) for v in np.percentile(mus, q))
-        theta_ci = tuple(float(v) for v in np.percentile(ths, q))
-        inclusion = {nm: float(np.mean(boots[:, j] != 0)) for j, nm in enumerate(library)}
+        mu_ci = tuple(float(v) for v in percentile_interval(mus, level))
+        theta_ci = tuple(float(v) for v in percentile_interval(ths, level))
+        incl = inclusion(boots, library)
     a, b = Theta[:, jc], Theta[:, jf]
     cos = float(abs(a @ b) / max(np.linalg.norm(a) * np.linalg.norm(b), 1e-300))
-    warns = []
-    if cos > _COLLINEAR:
-        warns.append(f"friction and inclination are confounded in these flights (cosine "
-                     f"{cos:.4f} between their columns): only a combination of mu and "
-                     "theta is determined, no intervals; pool recordings at several "
-                     "clearances")
-        mu_ci = theta_ci = (math.nan, math.nan)
     misfit = float(np.sqrt(np.mean(resid ** 2)) / np.sqrt(np.mean(tents.jumps() ** 2)))
+    if rivals and math.isfinite(mu_ci[0]):
+        mus_all = [mu_ci[0], mu_ci[1]] + [max(p[0], 0.0) for p in rivals]
+        ths_all = [theta_ci[0], theta_ci[1]] + [p[1] for p in rivals]
+        mu_ci = (min(mus_all), max(mus_all))
+        theta_ci = (min(ths_all), max(ths_all))
+    equation = _equation(kept, kc)
+    diagnostic = {"mu": mu, "theta_deg": theta, "terms": kept, "coefficients": kc,
+                  "equation": equation, "mu_ci": mu_ci, "theta_ci": theta_ci}
+    reasons = []
     if misfit > _MAX_MISFIT:
-        warns.append(f"the identified law misses the tents by {misfit:.1%} of the ball "
-                     "velocity jumps (pulse areas give them to ~0.1 %): the weak form "
-                     "does not hold (unseen re-impacts in wall chatter, the ball riding "
-                     "a wall, missed impacts); the law and its intervals are unreliable")
+        reasons.append(f"the weak form does not hold: the fit misses the tents by "
+                       f"{misfit:.1%} of the ball velocity jumps (pulse areas give them to "
+                       "~0.1 %; unseen re-impacts in wall chatter, the ball riding a wall, "
+                       "missed or double-counted impacts)")
+    if cos > _COLLINEAR:
+        reasons.append(f"friction and inclination are confounded in these flights (cosine "
+                       f"{cos:.4f} between their columns); pool recordings at several "
+                       "clearances")
     if rivals:
         alt = ", ".join(f"(mu={p[0]:.3f}, theta={p[1]:.2f} deg)" for p in rivals)
-        warns.append(f"ambiguous: the reconstruction also closes with {alt} about as well "
-                     "as with the selected law; intervals widened to include them; pool "
-                     "recordings at several clearances")
-        if math.isfinite(mu_ci[0]):
-            mus_all = [mu_ci[0], mu_ci[1]] + [max(p[0], 0.0) for p in rivals]
-            ths_all = [theta_ci[0], theta_ci[1]] + [p[1] for p in rivals]
-            mu_ci = (min(mus_all), max(mus_all))
-            theta_ci = (min(ths_all), max(ths_all))
-    return FlightLawResult(mu=mu if _FRICTION in kept else 0.0,
-                           theta_deg=theta if _CONSTANT in kept else 0.0,
-                           terms=kept, coefficients=kc, mu_ci=mu_ci, theta_ci=theta_ci,
-                           equation=_equation(kept, kc), n_flights=tents.flights_used(),
-                           n_equations=tents.n, library=library, inclusion=inclusion,
-                           threshold=float(threshold), confidence=float(confidence),
-                           iterations=it, residual_rms=float(np.sqrt(np.mean(resid ** 2))),
-                           collinearity=cos, misfit=misfit, warnings=tuple(warns))
+        reasons.append(f"friction and inclination are confounded: the reconstruction also "
+                       f"closes with {alt} about as well; pool recordings at several "
+                       "clearances")
+    if mu < 0:
+        reasons.append(f"inadmissible friction mu = {mu:.3g} < 0 (the friction term has "
+                       "the wrong sign)")
+    if abs(theta) > max_tilt_deg:
+        reasons.append(f"inadmissible inclination theta = {theta:.3g} deg beyond "
+                       f"+/-{max_tilt_deg:g} deg (widen with max_tilt_deg / --max-tilt if "
+                       "the rig is tilted that much)")
+    common = dict(n_flights=tents.flights_used(), n_equations=tents.n, library=library,
+                  inclusion=incl, threshold=float(threshold), level=float(level),
+                  iterations=it, residual_rms=float(np.sqrt(np.mean(resid ** 2))),
+                  collinearity=cos, misfit=misfit, max_tilt_deg=float(max_tilt_deg),
+                  diagnostic=diagnostic)
+    if reasons:
+        return FlightLawResult(mu=math.nan, theta_deg=math.nan, terms=[], coefficients=[],
+                               mu_ci=(math.nan, math.nan), theta_ci=(math.nan, math.nan),
+                               equation="not identified", identified=False,
+                               reason="; ".join(reasons), warnings=tuple(reasons), **common)
+    return FlightLawResult(mu=mu, theta_deg=theta, terms=kept, coefficients=kc, mu_ci=mu_ci,
+                           theta_ci=theta_ci, equation=equation, **common)

@@ -17,7 +17,12 @@ import numpy as np
 
 from ..errors import InputError
 from ..restitution_laws import RestitutionLaw
-from .impact_terms import CONSTANT_TERM, IMPACT_TERMS
+from .impact_terms import (
+    CONSTANT_TERM,
+    HUNT_CROSSLEY_TERM,
+    IMPACT_TERMS,
+    hunt_crossley_restitution,
+)
 
 if TYPE_CHECKING:  # pragma: no cover
     import pandas as pd
@@ -32,8 +37,11 @@ __all__ = ["ImpactLawResult", "same_form", "EQUIVALENT_EXPONENTS", "RESULT_KINDS
 EQUIVALENT_EXPONENTS: tuple[frozenset[float], ...] = (frozenset({0.2, 0.25}),)
 
 #: Values of :attr:`ImpactLawResult.kind`: a :data:`~vidiscover.LAW_KINDS` kind,
-#: ``"generic"`` (a formula with no RestitutionLaw kind) or ``"undetermined"``.
-RESULT_KINDS = ("constant", "linear", "power", "generic", "undetermined")
+#: ``"hunt-crossley"`` (``r = r_HC(alpha v)``), ``"generic"`` (a formula with no
+#: RestitutionLaw kind) or ``"undetermined"``.
+RESULT_KINDS = ("constant", "linear", "power", "hunt-crossley", "generic", "undetermined")
+#: Points of the machine-readable band in :meth:`ImpactLawResult.to_dict`.
+BAND_POINTS = 25
 
 
 
@@ -87,9 +95,18 @@ def _num(x: Any) -> float | None:
 
 
 def _evaluate(terms: Sequence[str], coefs: np.ndarray, v) -> np.ndarray:
+    """Restitution at speeds ``v``.
+
+    Shape ``v.shape``, or ``v.shape + (n_sets,)`` for a 2-D ``coefs`` holding one
+    coefficient set per row.
+    """
     v = np.asarray(v, dtype=float)
+    coefs = np.asarray(coefs, dtype=float)
+    if tuple(terms) == (HUNT_CROSSLEY_TERM,):
+        alpha = coefs[..., 0] if coefs.ndim == 2 else coefs[0]
+        return hunt_crossley_restitution(np.multiply.outer(v, alpha))
     cols = np.stack([IMPACT_TERMS[t](v) for t in terms], axis=-1)
-    return cols @ np.asarray(coefs, dtype=float).T
+    return cols @ coefs.T
 
 
 @dataclass(frozen=True, eq=False)
@@ -138,8 +155,19 @@ class ImpactLawResult:
         Confidence level of ``ci`` and :meth:`band`.
     warning : str or None
         Why the fit fell back to a constant (or found nothing), else None.
-    boot_coefficients : ndarray, shape (n_bootstrap, len(terms))
+    boot_coefficients : ndarray, shape (n_boot, len(terms))
         Refitted coefficients per resample.
+    effect : float
+        Max - min of the selected law over the observed speeds (1st-99th
+        percentile); 0 for a constant.
+    effect_threshold : float
+        Smallest effect a speed dependence needed to be reported:
+        ``max(min_effect, EFFECT_PER_SCATTER * precision)``.
+    precision : float
+        Weighted RMS scatter of the r estimates about the best law.
+    note : str or None
+        Why a speed dependence that AICc prefers was not reported (its effect
+        was below ``effect_threshold``), else None.
     """
 
     formula: str
@@ -164,18 +192,23 @@ class ImpactLawResult:
     level: float
     warning: str | None
     boot_coefficients: np.ndarray = field(repr=False)
+    effect: float = math.nan
+    effect_threshold: float = math.nan
+    precision: float = math.nan
+    note: str | None = None
 
     def __post_init__(self) -> None:
         if self.kind not in RESULT_KINDS:
             raise ValueError(f"kind must be one of {', '.join(RESULT_KINDS)}, was {self.kind!r}")
-        unknown = [t for t in self.terms if t not in IMPACT_TERMS]
+        unknown = [t for t in self.terms if t not in IMPACT_TERMS
+                   and t != HUNT_CROSSLEY_TERM]
         if unknown:
             raise ValueError(f"terms must be registered impact terms, unknown: {unknown}")
         if tuple(self.coefficients) != tuple(self.terms) or tuple(self.ci) != tuple(self.terms):
             raise ValueError("coefficients and ci must have one entry per term, in order")
         boot = np.asarray(self.boot_coefficients, dtype=float)
         if boot.ndim != 2 or boot.shape[1] != len(self.terms):
-            raise ValueError(f"boot_coefficients must have shape (n_bootstrap, "
+            raise ValueError(f"boot_coefficients must have shape (n_boot, "
                              f"{len(self.terms)}), was {boot.shape}")
         if not 0.0 < self.level < 1.0:
             raise ValueError(f"level must be in (0, 1), was {self.level!r}")
@@ -191,22 +224,46 @@ class ImpactLawResult:
             return np.full(np.shape(v), np.nan)
         return _evaluate(self.terms, np.array([self.coefficients[t] for t in self.terms]), v)
 
+    def band_table(self, n_points: int = BAND_POINTS) -> dict:
+        """The band on a grid from 0.6 x the slowest to 1.4 x the fastest observed speed.
+
+        Returns
+        -------
+        dict
+            ``level``, ``v``, ``lo``, ``mid``, ``hi`` (lists; NaN becomes None in
+            :meth:`to_dict`), empty lists without impacts.
+        """
+        v0, v1 = self.speed_range
+        if not (self.terms and math.isfinite(v0) and math.isfinite(v1)):
+            return {"level": float(self.level), "v": [], "lo": [], "mid": [], "hi": []}
+        grid = np.linspace(0.6 * v0, 1.4 * v1, n_points)
+        lo, mid, hi = self.band(grid)
+        return {"level": float(self.level), "v": grid.tolist(), "lo": lo.tolist(),
+                "mid": mid.tolist(), "hi": hi.tolist()}
+
     def band(self, v_grid, level: float | None = None) -> tuple[np.ndarray, np.ndarray,
                                                                 np.ndarray]:
-        """Pointwise bootstrap band of r(v).
+        """Pointwise band of r(v) that widens outside the observed speeds.
+
+        Inside :attr:`speed_range`: percentiles of the bootstrap curves. Outside
+        it, the bootstrap curves extrapolate the selected form, and a speed
+        dependence too small to be reported (an effect up to
+        :attr:`effect_threshold` over the observed span) may continue there: the
+        band is widened on both sides by ``effect_threshold * d / span``, ``d``
+        the distance (m/s) to the observed range.
 
         Parameters
         ----------
         v_grid : array_like
-            Speeds (m/s); meaningful inside :attr:`speed_range`.
+            Speeds (m/s).
         level : float, optional
-            Coverage of the band (default :attr:`level`).
+            Coverage of the bootstrap part (default :attr:`level`).
 
         Returns
         -------
         lo, mid, hi : ndarray
-            Lower percentile, point estimate and upper percentile at each speed
-            (``lo``/``hi`` are NaN without bootstrap resamples).
+            Lower bound, point estimate and upper bound at each speed (``lo``/``hi``
+            are NaN without bootstrap resamples).
         """
         level = self.level if level is None else float(level)
         if not 0.0 < level < 1.0:
@@ -219,7 +276,12 @@ class ImpactLawResult:
         curves = _evaluate(self.terms, self.boot_coefficients, v_grid)  # (..., n_boot)
         q = 50.0 * (1.0 - level)
         lo, hi = np.percentile(curves, [q, 100.0 - q], axis=-1)
-        return lo, mid, hi
+        v0, v1 = self.speed_range
+        span = max(v1 - v0, 1e-12)
+        dist = np.maximum(v0 - v_grid, 0.0) + np.maximum(v_grid - v1, 0.0)
+        extra = (self.effect_threshold if math.isfinite(self.effect_threshold) else 0.0) \
+            * dist / span
+        return np.minimum(lo, mid) - extra, mid, np.maximum(hi, mid) + extra
 
     def to_dict(self) -> dict:
         """JSON-ready form (NaN becomes None)."""
@@ -247,6 +309,10 @@ class ImpactLawResult:
             "support_frequency": _num(self.support_frequency),
             "selection_frequency": {k: _num(f) for k, f in self.selection_frequency.items()},
             "criterion": self.criterion, "level": float(self.level),
-            "n_bootstrap": int(self.boot_coefficients.shape[0]),
+            "n_boot": int(self.boot_coefficients.shape[0]),
+            "effect": _num(self.effect), "effect_threshold": _num(self.effect_threshold),
+            "precision": _num(self.precision), "note": self.note,
+            "band": {k: ([_num(x) for x in val] if isinstance(val, list) else val)
+                     for k, val in self.band_table().items()},
             "warning": self.warning, "candidates": cands,
         }

@@ -4,12 +4,16 @@ Several recordings are pooled: each is analysed by :func:`vidiscover.analysis.an
 (stages 1-4), then
 
 * **flight law** -- :func:`vidiscover.discovery.flight_law.discover_flight_law` on the
-  analyses (friction mu, inclination theta, other terms). When it finds friction
+  analyses (friction mu, inclination theta, other terms). When it *identifies* a
+  law (admissible, not confounded, the weak form holds) with friction
   (``mu > 0``) different from the assumed one, or an inclination (|theta| >= 0.05
-  deg), the recordings are analysed again with the identified law (``refine_mu``,
-  ``analyze(..., flight_law=...)``): r depends strongly on the friction
+  deg), the recordings are analysed again with it (``refine_mu``,
+  ``analyze(..., flight_law=(mu, theta))``): r depends strongly on the friction
   correction of the flights (paper Table 2), and an r estimated with the wrong mu
-  carries a speed-dependent bias that the impact-law discovery would report as a law;
+  carries a speed-dependent bias that the impact-law discovery would report as a
+  law. A law that is not identified is never fed back: the impact laws then come
+  from the flights of the assumed ``mu`` (straight lines for mu = 0), and a
+  warning says so;
 * **impact law, per wall** -- the impacts whose r the analysis trusts (impact table
   column ``r_used``) give one point ``(v, r)`` each, with ``v = |u_minus|`` the
   relative pre-impact speed ``|z'-| = |w- - v_LO-|`` (m/s) and the standard error
@@ -26,7 +30,7 @@ Several recordings are pooled: each is analysed by :func:`vidiscover.analysis.an
 >>> fx = Effects.parse(["velocity_dependent_restitution=right=linear:0.95:0.12,left=0.3"])
 >>> recs = [record(simulate(preset("paper", b=b), fx, settle=5.0, duration=2.0),
 ...                seed=1)[0] for b in (0.006, 0.009)]
->>> res = discover(recs, n_bootstrap=20, flight=False)
+>>> res = discover(recs, n_boot=20, flight=False)
 >>> res.impact_laws["right"].kind, res.impact_laws["left"].formula
 ('linear', 'r = 0.3')
 """
@@ -47,7 +51,8 @@ from .._atomic import to_jsonable
 from ..analysis import AnalysisResult, analyze
 from ..errors import InputError
 from ..recording import Recording
-from .impact_law import discover_impact_law
+from .flight_law import MAX_TILT_DEG
+from .impact_law import MIN_EFFECT, discover_impact_law
 from .impact_result import ImpactLawResult
 
 __all__ = ["DiscoveryResult", "discover", "SIDES", "IMPACT_DATA_COLUMNS"]
@@ -56,6 +61,9 @@ __all__ = ["DiscoveryResult", "discover", "SIDES", "IMPACT_DATA_COLUMNS"]
 SIDES = ("right", "left")
 #: Columns of :attr:`DiscoveryResult.impact_data` tables.
 IMPACT_DATA_COLUMNS = ("recording", "group", "t", "v", "r", "sigma")
+#: ``flight`` of the summary when the flight-law discovery did not run.
+_NOT_RUN = {"identified": False, "reason": "flight-law discovery not run", "mu": None,
+            "theta_deg": None, "terms": [], "coefficients": [], "equation": "not identified"}
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,13 +81,15 @@ class DiscoveryResult:
     impact_laws : Mapping[str, ImpactLawResult]
         Per wall, the discovered restitution law.
     flight : FlightLawResult or None
-        The discovered flight law (None when not run or unavailable; see
-        ``warnings``).
+        The flight-law result, identified or not (None when not run or it failed
+        on its input; see ``warnings``).
     mu : float
         Friction coefficient assumed on input.
     mu_impacts : float
         Friction coefficient of the analyses the impact laws come from (the
         identified one after ``refine_mu``).
+    theta_impacts : float
+        Inclination (deg) of the analyses the impact laws come from.
     warnings : tuple of str
         Everything that limited the discovery.
     """
@@ -91,16 +101,19 @@ class DiscoveryResult:
     flight: Any
     mu: float
     mu_impacts: float
+    theta_impacts: float = 0.0
     warnings: tuple[str, ...] = ()
 
     def equations(self) -> list[str]:
         """The discovered laws as text lines (flight law first)."""
         lines = []
-        if self.flight is not None:
+        if self.flight is not None and self.flight.identified:
             lines.append(f"flight: {self.flight.equation}   (mu = {self.flight.mu:.4g}, "
                          f"theta = {self.flight.theta_deg:.4g} deg)")
+        elif self.flight is not None:
+            lines.append(f"flight: not identified ({self.flight.reason})")
         else:
-            lines.append("flight: not identified")
+            lines.append("flight: not identified (flight-law discovery not run)")
         for side in SIDES:
             law = self.impact_laws[side]
             rng = law.speed_range
@@ -112,12 +125,14 @@ class DiscoveryResult:
     def summary(self) -> dict:
         """JSON-ready dict (DESIGN.md section 6 ``discover`` keys and more).
 
-        Keys: ``flight`` (``mu``, ``theta_deg``, ``terms``, ``equation``, intervals;
-        None when the flight law was not identified), ``impact_law`` {``right``,
-        ``left``} (``formula``, ``kind``, ``terms``, ``coefficients`` with ``ci``,
-        ``delta_aicc_vs_constant``, ``p_value_vs_constant``, ``speed_range``, ``n``,
-        ``candidates``, ...), ``equations``, ``recordings``, ``n_recordings``,
-        ``mu_assumed``, ``mu_impacts`` (mu of the analyses behind the impact laws),
+        Keys: ``flight`` (``identified``, ``reason``, ``mu``, ``theta_deg``,
+        ``terms``, ``equation``, intervals, ``diagnostic_fit``; ``mu``/``theta_deg``
+        None when not identified or not run), ``impact_law`` {``right``, ``left``}
+        (``formula``, ``kind``, ``terms``, ``coefficients`` with ``ci``, ``effect``,
+        ``effect_threshold``, ``band``, ``delta_aicc_vs_constant``,
+        ``p_value_vs_constant``, ``speed_range``, ``n``, ``candidates``, ...),
+        ``equations``, ``recordings``, ``n_recordings``, ``mu_assumed``,
+        ``mu_impacts``, ``theta_impacts`` (the flight law behind the impact laws),
         ``warnings``. NaN becomes None.
         """
         return to_jsonable({
@@ -125,7 +140,8 @@ class DiscoveryResult:
             "n_recordings": len(self.recordings),
             "mu_assumed": self.mu,
             "mu_impacts": self.mu_impacts,
-            "flight": None if self.flight is None else self.flight.to_dict(),
+            "theta_impacts": self.theta_impacts,
+            "flight": _NOT_RUN if self.flight is None else self.flight.to_dict(),
             "impact_law": {side: self.impact_laws[side].to_dict() for side in SIDES},
             "equations": self.equations(),
             "warnings": list(self.warnings),
@@ -157,7 +173,7 @@ def _residuals(analysis: AnalysisResult, flight) -> pd.DataFrame:
     dv = np.asarray(analysis.detection.dv, dtype=float)
     recon = analysis.reconstruction
     funcs = []
-    if flight is not None:
+    if flight is not None and flight.identified:
         try:
             from .flight_law import FLIGHT_TERMS
         except ImportError:  # pragma: no cover - depends on the flight-law module
@@ -204,6 +220,7 @@ def _as_items(items) -> list:
 
 
 def _analysis_of(item, mu: float, threshold: float, meta) -> AnalysisResult:
+    """The analysis of one input (analysed here unless it already is)."""
     if isinstance(item, AnalysisResult):
         return item
     if isinstance(item, (str, os.PathLike)):
@@ -229,23 +246,28 @@ def _pool(analyses: Sequence[AnalysisResult], side: str) -> pd.DataFrame:
     return pd.concat(frames, ignore_index=True)[list(IMPACT_DATA_COLUMNS)]
 
 
-def _flight_law(analyses, seed: int, flight_kws: Mapping | None):
+def _flight_law(analyses, seed: int, n_boot: int, level: float, max_tilt_deg: float,
+                flight_kws: Mapping | None):
     """(FlightLawResult or None, warning or None)."""
+    from .flight_law import discover_flight_law
+
+    kws = {"seed": seed, "n_boot": n_boot, "level": level, "max_tilt_deg": max_tilt_deg,
+           **dict(flight_kws or {})}
     try:
-        from .flight_law import discover_flight_law
-    except ImportError as err:
-        return None, f"flight-law discovery unavailable ({err}); flight law not identified"
-    try:
-        return discover_flight_law(list(analyses), seed=seed, **dict(flight_kws or {})), None
+        res = discover_flight_law(list(analyses), **kws)
     except InputError as err:
         return None, f"flight law not identified: {err}"
+    if not res.identified:
+        return res, f"flight law not identified: {res.reason}"
+    return res, None
 
 
-def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_bootstrap: int = 200,
-             criterion: str = "aicc", terms: Sequence[str] | None = None,
-             threshold: float = 5.5, meta=None, flight: bool = True,
-             flight_kws: Mapping | None = None, impact_kws: Mapping | None = None,
-             refine_mu: bool = True,
+def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
+             level: float = 0.95, criterion: str = "aicc",
+             terms: Sequence[str] | None = None, min_effect: float = MIN_EFFECT,
+             max_tilt_deg: float = MAX_TILT_DEG, threshold: float = 5.5, meta=None,
+             flight: bool = True, flight_kws: Mapping | None = None,
+             impact_kws: Mapping | None = None, refine_mu: bool = True,
              progress: bool = False) -> DiscoveryResult:
     """Discover the flight law and the impact law per wall from one or more recordings.
 
@@ -259,13 +281,20 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_bootstrap: int = 2
         Friction coefficient assumed by the analyses (paper eq. 8).
     seed : int, optional
         Seed of every bootstrap and cross-validation split.
-    n_bootstrap : int, optional
-        Bootstrap resamples of the impact laws (intervals, band, selection
-        frequencies).
+    n_boot : int, optional
+        Bootstrap resamples of the flight law and of the impact laws (intervals,
+        band, selection frequencies).
+    level : float, optional
+        Level of every interval and band.
     criterion : {"aicc", "cv"}, optional
         Impact-law selection rule (see :func:`discover_impact_law`).
     terms : sequence of str, optional
         Impact-law candidate terms (default: the whole registry).
+    min_effect : float, optional
+        Smallest effect (max - min of r over the observed speeds) of a reported
+        speed dependence (default :data:`~vidiscover.discovery.impact_law.MIN_EFFECT`).
+    max_tilt_deg : float, optional
+        Largest admissible |theta| of the flight law (deg).
     threshold : float, optional
         Impact detection threshold of the analyses.
     meta : path-like, dict or Metadata, optional
@@ -273,15 +302,15 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_bootstrap: int = 2
     flight : bool, optional
         Run the flight-law discovery.
     flight_kws : Mapping, optional
-        Extra keyword arguments of ``discover_flight_law``.
+        Other keyword arguments of ``discover_flight_law`` (e.g. ``threshold``,
+        ``window``).
     impact_kws : Mapping, optional
-        Extra keyword arguments of :func:`discover_impact_law` (e.g.
-        ``min_effect``, ``aicc_window``, ``outlier_z``, ``max_terms``).
+        Other keyword arguments of :func:`discover_impact_law` (e.g.
+        ``aicc_window``, ``outlier_z``, ``max_terms``).
     refine_mu : bool, optional
-        When the flight law identifies friction ``mu_id > 0`` that differs from
-        ``mu`` by more than 0.005, or an inclination of at least 0.05 deg, analyse
-        the recordings again with the identified law before the impact-law
-        discovery.
+        When the flight law is identified with friction ``mu_id > 0`` that differs
+        from ``mu`` by more than 0.005, or an inclination of at least 0.05 deg,
+        analyse the recordings again with it before the impact-law discovery.
     progress : bool, optional
         Show a tqdm progress bar over the recordings.
 
@@ -298,6 +327,10 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_bootstrap: int = 2
         raise InputError(f"mu must be in [0, 2] (friction coefficient), was {mu!r}")
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
         raise InputError(f"seed must be an integer >= 0, was {seed!r}")
+    if not isinstance(n_boot, (int, np.integer)) or isinstance(n_boot, bool) or n_boot < 0:
+        raise InputError(f"n_boot must be an integer >= 0, was {n_boot!r}")
+    if not (isinstance(level, (int, float)) and 0.0 < level < 1.0):
+        raise InputError(f"level must be in (0, 1), was {level!r}")
     for name, kws in (("flight_kws", flight_kws), ("impact_kws", impact_kws)):
         if kws is not None and not isinstance(kws, Mapping):
             raise InputError(f"{name} must be a mapping of keyword arguments, "
@@ -311,30 +344,40 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_bootstrap: int = 2
     warnings = [f"{a.name}: {w}" for a in analyses for w in a.warnings]
     flight_result = None
     if flight:
-        flight_result, note = _flight_law(analyses, int(seed), flight_kws)
+        flight_result, note = _flight_law(analyses, int(seed), int(n_boot), float(level),
+                                          max_tilt_deg, flight_kws)
         if note:
             warnings.append(note)
-    mu_impacts = float(mu)
-    if refine_mu and flight_result is not None:
+    mu_impacts, theta_impacts = float(mu), 0.0
+    if flight_result is None or not flight_result.identified:
+        if flight:
+            warnings.append(f"impact laws fitted with the flights of the assumed law "
+                            f"(mu = {mu:g}, theta = 0{': straight lines' if mu == 0 else ''})"
+                            ", not with a flight law")
+    elif refine_mu:
         mu_id = float(flight_result.mu)
         theta_id = float(flight_result.theta_deg)
-        theta_id = theta_id if math.isfinite(theta_id) and abs(theta_id) >= 0.05 else 0.0
+        theta_id = theta_id if abs(theta_id) >= 0.05 else 0.0
         recs = [a.recording for a in analyses]
-        if (math.isfinite(mu_id) and all(r is not None for r in recs)
+        if (all(r is not None for r in recs)
                 and ((mu_id > 0 and abs(mu_id - mu) > 0.005) or theta_id)):
-            mu_impacts = min(max(mu_id, 0.0), 2.0)
+            mu_impacts, theta_impacts = min(max(mu_id, 0.0), 2.0), theta_id
             analyses = tuple(analyze(r, threshold=threshold, n_boot=0,
                                      flight_law=(mu_impacts, theta_id)) for r in recs)
     data, laws = {}, {}
     for side in SIDES:
         data[side] = _pool(analyses, side)
         d = data[side]
+        kws = {"seed": int(seed), "n_boot": int(n_boot), "level": float(level),
+               "criterion": criterion, "terms": terms, "min_effect": min_effect,
+               **dict(impact_kws or {})}
         laws[side] = discover_impact_law(d["v"], d["r"], sigma=d["sigma"], groups=d["group"],
-                                         seed=int(seed), n_bootstrap=n_bootstrap,
-                                         criterion=criterion, terms=terms,
-                                         **dict(impact_kws or {}))
+                                         **kws)
         if laws[side].warning:
             warnings.append(f"{side} wall: {laws[side].warning}")
+        if laws[side].note:
+            warnings.append(f"{side} wall: {laws[side].note}")
     return DiscoveryResult(recordings=tuple(a.name for a in analyses), analyses=analyses,
                            impact_data=data, impact_laws=laws, flight=flight_result,
-                           mu=float(mu), mu_impacts=mu_impacts, warnings=tuple(warnings))
+                           mu=float(mu), mu_impacts=mu_impacts, theta_impacts=theta_impacts,
+                           warnings=tuple(warnings))
