@@ -14,7 +14,7 @@ def test_every_public_name_imports():
 
 def test_no_private_names_are_public():
     assert all(not n.startswith("_") for n in vidiscover.__all__)
-    for mod in ("effects", "params", "recording", "sensors", "simulation", "io",
+    for mod in ("effects", "params", "recording", "truth", "sensors", "simulation", "io",
                 "restitution_laws", "regimes", "analysis", "discovery", "report"):
         m = importlib.import_module(f"vidiscover.{mod}")
         assert all(not n.startswith("_") for n in m.__all__), mod

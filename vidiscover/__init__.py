@@ -19,6 +19,7 @@ _LAZY = {
     "AnalysisResult": "analysis",
     "EFFECTS": "effects",
     "Effects": "effects",
+    "GroundTruth": "truth",
     "InputError": "errors",
     "Metadata": "recording",
     "PRESETS": "params",
