@@ -34,3 +34,4 @@ Feature: Bad recordings are refused with one clear line
       | metadata is not valid JSON                 | rec.json | malformed JSON                                     |
       | file is empty                              | rec.csv  | empty file                                         |
       | file is truncated in its last row          | rec.csv  | truncated file                                     |
+      | columns are in mV without sensitivities    | rec.csv  | gives no sensitivity x_mV_per_mm, a_mV_per_g, xe_mV_per_mm |

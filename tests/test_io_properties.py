@@ -20,11 +20,11 @@ from hypothesis import strategies as st
 
 import vidiscover._atomic as vatomic
 import vidiscover.io as vio
+from vidiscover.effects import Effects
 from vidiscover.errors import InputError
 from vidiscover.io import read_recording, write_recording
-from vidiscover.effects import Effects
 from vidiscover.params import preset
-from vidiscover.recording import Metadata, Recording
+from vidiscover.recording import PAPER_SENSITIVITY, Metadata, Recording
 from vidiscover.truth import GroundTruth, TrueImpacts, TrueMotion
 
 SETTINGS = settings(max_examples=60, deadline=None,
@@ -317,7 +317,7 @@ def test_unknown_keys_are_kept(extra):
 # ============================================================================ atomic writes
 def _tiny_recording() -> Recording:
     cols = np.array(ROWS, dtype=float).T
-    return Recording(*cols, meta=Metadata(**META), name="rec")
+    return Recording(*cols, meta=Metadata(**META, sensitivity=PAPER_SENSITIVITY), name="rec")
 
 
 TINY = _tiny_recording()

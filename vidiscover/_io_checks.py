@@ -334,6 +334,13 @@ def build_recording(raw: RawTable, cols: dict[str, str], values: dict[str, np.nd
         raise InputError(f"{path}: record too short: {duration:.4g} s ({n} samples); {rule}; "
                          "record longer")
     sens = meta.sensitivity
+    missing = [f"{c.removesuffix('_mV')}_mV_per_{'g' if c == 'a_mV' else 'mm'}"
+               for c in cols.values() if c.endswith("_mV")]
+    missing = [k for k in missing if k not in sens]
+    if missing:
+        raise InputError(f"{path}: the file is in mV but {meta.source} gives no sensitivity "
+                         f"{', '.join(missing)}; add them, e.g. \"sensitivity\": "
+                         f"{{\"{missing[0]}\": ...}}, or pass --meta with them")
     sig = {"t": t}
     for s in ("x", "xe"):
         sig[s] = (values[s] / sens[f"{s}_mV_per_mm"] / 1000.0 if cols[s] == f"{s}_mV"

@@ -431,6 +431,10 @@ def _columns_for(rec: Recording, units: str) -> dict[str, np.ndarray]:
     if units == "SI":
         return {"t": rec.t, "x": rec.x, "a": rec.a, "xe": rec.xe}
     s = rec.meta.sensitivity
+    missing = [k for k in ("x_mV_per_mm", "xe_mV_per_mm", "a_mV_per_g") if k not in s]
+    if missing:
+        raise InputError(f"{rec.name}: cannot write mV columns without the sensitivities "
+                         f"{', '.join(missing)}; set them in the recording's metadata")
     return {"t": rec.t, "x_mV": rec.x * 1000.0 * s["x_mV_per_mm"],
             "a_mV": rec.a / G_ACCEL * s["a_mV_per_g"],
             "xe_mV": rec.xe * 1000.0 * s["xe_mV_per_mm"]}

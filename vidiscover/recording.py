@@ -50,7 +50,9 @@ class Metadata:
     excitation : dict
         ``{"amplitude": m, "frequency": Hz}``.
     sensitivity : dict
-        ``x_mV_per_mm``, ``xe_mV_per_mm``, ``a_mV_per_g`` for files in mV.
+        ``x_mV_per_mm``, ``xe_mV_per_mm``, ``a_mV_per_g`` for files in mV: only the
+        keys given (a file in mV without its sensitivities is refused, never
+        converted with assumed values such as the paper's :data:`PAPER_SENSITIVITY`).
     extra : dict
         Any other keys found in the file (kept, not interpreted).
     source : str
@@ -65,7 +67,7 @@ class Metadata:
     k1: float = 11.47e3
     excitation: Mapping[str, float] = field(
         default_factory=lambda: {"amplitude": 0.5e-3, "frequency": 8.0})
-    sensitivity: Mapping[str, float] = field(default_factory=lambda: dict(PAPER_SENSITIVITY))
+    sensitivity: Mapping[str, float] = field(default_factory=dict)
     extra: Mapping[str, Any] = field(default_factory=dict)
     source: str = "metadata"
 
@@ -101,7 +103,7 @@ class Metadata:
             raise InputError(f"{where}: excitation.amplitude = {exc['amplitude']!r} m is "
                              "implausibly large; it is in metres (e.g. 0.0005 for 0.5 mm)")
         object.__setattr__(self, "excitation", exc)
-        sens = dict(PAPER_SENSITIVITY)
+        sens = {}
         given = dict(self.sensitivity or {})
         unknown = sorted(set(given) - set(PAPER_SENSITIVITY))
         if unknown:

@@ -147,6 +147,16 @@ def metadata_not_json(rig):
     rig["meta"].write_text(rig["meta"].read_text().replace(",", "", 1))
 
 
+@given("a recording whose columns are in mV without sensitivities")
+def mv_without_sensitivities(rig):
+    lines = _lines(rig["path"])
+    lines[0] = "t,x_mV,a_mV,xe_mV\n"
+    _rewrite(rig["path"], lines)
+    meta = json.loads(rig["meta"].read_text())
+    meta.pop("sensitivity", None)
+    rig["meta"].write_text(json.dumps(meta))
+
+
 @given("a recording whose file is empty")
 def empty_file(rig):
     rig["path"].write_text("")
