@@ -84,6 +84,7 @@ def test_one_impact_per_contact_episode(name):
     precision, recall = ie.size / det.n, ok[it].sum() / ok.sum()
     assert precision >= 0.98 and recall >= 0.98
     assert precision == 1.0 and recall == 1.0         # measured
+    assert not det.columns["merged"].any()            # no unresolved chatter flagged
 
 
 @pytest.mark.parametrize("name", CASES)

@@ -1,10 +1,17 @@
 """Stage 1: impacts as transient pulses in the LO acceleration (paper Sec. 4, Fig. 4).
 
-An impact changes the LO velocity by a jump dv in an instant; the accelerometer
-sees it through its acquisition chain as a short band-limited pulse of area dv
-(:func:`vidiscover.sensors.pulse_kernel`) on top of the smooth forced response.
-:func:`detect_impacts` separates the two:
+An impact changes the LO velocity by a jump dv during a short contact; the
+accelerometer sees it through its acquisition chain as a band-limited pulse of area
+dv on top of the smooth forced response. The pulse shape (:class:`.pulse.PulseModel`:
+anti-alias filter kind, order, cut-off, contact duration, and so the delay from the
+contact entry to the pulse peak) is *learned from the recording*
+(:func:`.pulse.learn_pulse`, on its strongest isolated pulses) unless a model is
+given. The filter's ringing is part of that shape, so it is fitted, not counted.
+:func:`detect_impacts` separates pulses and smooth part:
 
+0. *Pulse response.* Learned (or given); impact times are reported at the contact
+   entry: the fitted pulse time less the learned delay. Pulses whose contact would
+   begin before the first sample (a causal filter's start-up) are ignored.
 1. *Smooth part.* A cubic Savitzky-Golay smoother (a few ms) of the acceleration
    with the pulses found so far subtracted; bad samples (NaN dropouts, clipped
    readings) and the main lobes (+/- 2 samples) of the fitted pulses are bridged by
@@ -18,8 +25,8 @@ sees it through its acquisition chain as a short band-limited pulse of area dv
    kernel span (kernel side lobes are <= 0.3 of the main lobe); later rounds
    run on the residual of the fitted pulses, where the floor is raised by
    ``mismatch`` times the SNR of fitted neighbours (model error).
-4. *Fit.* Each pulse is fitted in a window of +/- ``fit_halfwidth`` samples by the
-   known kernel plus a local straight line, by variable projection on a grid of
+4. *Fit.* Each pulse is fitted in a window of +/- ``fit_halfwidth`` samples about its
+   peak by the pulse model plus a local straight line, by variable projection on a grid of
    sub-sample delays (1/20 sample) refined by a parabola, with the other pulses
    subtracted (back-fitting, so that chatter pulses a few samples apart are
    separated). Masked samples get zero weight. Centre -> time, amplitude -> dv.
@@ -28,7 +35,8 @@ sees it through its acquisition chain as a short band-limited pulse of area dv
 6. *Pruning.* Pulses below ``threshold``, or below ``threshold`` plus ``mismatch``
    times the SNR of a stronger pulse within the kernel span (its misfit lobes), are
    dropped, and so is the weaker of two same-sign pulses closer than 1.5 samples
-   (one pulse split in two); the neighbours are refitted.
+   (one pulse split in two); the neighbours are refitted. A pulse whose fit leaves a
+   residual above 3 times noise plus model error is flagged ``merged``.
 
 Limit: same-wall pulses of similar strength 2-3 samples apart may be fitted as one
 (see ``tests/test_analysis_properties.py``); in the simulated rig the re-impacts of
@@ -61,7 +69,7 @@ __all__ = ["PulseModel", "ImpactDetection", "detect_impacts", "IMPACT_COLUMNS"]
 
 #: Columns of :attr:`ImpactDetection.table`.
 IMPACT_COLUMNS = ("t", "side", "dv", "area", "snr", "peak", "sample", "reliable",
-                  "clipped", "dropout", "side_check")
+                  "clipped", "dropout", "side_check", "merged")
 
 _GRID_STEP = 0.05          # sub-sample delay grid of the fit (samples)
 _GRID_HALF = 1.5           # the grid spans +/- this many samples around the peak
@@ -69,6 +77,7 @@ _FIRST_ROUND_REL = 0.35    # first round: a peak must reach this share of the lo
 _MAX_CLIP_RUN = 4          # longer clipped runs are a saturated smooth response, not a pulse
 _LOBE = 2                  # samples each side of a pulse centre bridged for the smoother
 _SAME_WALL_MERGE = 1.5     # same-sign pulses closer than this (samples) are one pulse
+_MERGED = 3.0              # residual / (noise + model error) that flags a merged pulse
 _REBASE_SNR = 20.0         # a later-round pulse this strong makes the smooth part be redone
 
 
@@ -103,8 +112,10 @@ class ImpactDetection:
         ``peak`` (fitted peak acceleration, m/s^2), ``sample`` (nearest sample),
         ``reliable`` (no clipped or missing sample in the main lobe), ``clipped``,
         ``dropout`` (clipped / NaN samples within the fit window), ``side_check``
-        (consistent with the alternation condition, see module docs). Also as a
-        DataFrame: :attr:`table`.
+        (consistent with the alternation condition, see module docs), ``merged``
+        (the fit leaves a residual beyond noise and model error: probably unresolved
+        re-impacts counted as one). ``t`` is the contact entry: the fitted pulse
+        time less the learned delay. Also as a DataFrame: :attr:`table`.
     noise : float
         Accelerometer noise (m/s^2, robust).
     threshold : float
@@ -204,8 +215,10 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
     threshold : float
         Matched-filter SNR a pulse must exceed. Noise-only false alarms on a 5.12 s
         record at 6400 Hz: measured 0.03 per record at 5, about 0.005 at 5.5.
-    pulse : PulseModel, optional
-        Pulse shape (default: the acquisition model of :mod:`vidiscover.sensors`).
+    pulse : PulseModel or PulseResponse, optional
+        Pulse shape; default: learned from the recording (:func:`.pulse.learn_pulse`;
+        the default linear-phase model, with a warning, when the record has too few
+        strong isolated pulses). ``PulseModel()`` is the exact engine's default sensors.
     mu : float
         Friction coefficient assumed by the same-wall (chatter) plausibility check.
     baseline_ms : float
@@ -227,9 +240,9 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         impossible (the ball would cross the clearance faster); the weaker pulse of
         such a pair is dropped as a false alarm (counted in ``warnings``).
     fit_width : bool
-        When the strong pulses are wider than the pulse model (chi-square of their
-        fit above 1.5), refit with a contact duration ``tau`` chosen among 0.5-8
-        samples (the :attr:`ImpactDetection.pulse` then holds it).
+        For a given :class:`PulseModel`: when the strong pulses are wider than it
+        (chi-square of their fit above 1.5), refit with a contact duration ``tau``
+        chosen among 0.5-8 samples (the :attr:`ImpactDetection.pulse` then holds it).
 
     Returns
     -------
@@ -407,7 +420,8 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         a_smooth = smooth
         if bad.any():
             a_smooth[bad] = base[bad]
-    table = fit.table(float(rec.t[0]) - delay, resid, sigma, knorm, clip, nan)
+    model_error = max(mismatch, 2.0 * response.misfit) if response is not None else mismatch
+    table = fit.table(float(rec.t[0]) - delay, resid, sigma, knorm, clip, nan, model_error)
     if table["t"].size:
         check = _alternation_check(table, base, mu, sigma)
         table["side_check"] = check
@@ -415,6 +429,10 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         if n_bad:
             warnings.append(f"{n_bad} impact(s) on the same wall as the previous one while "
                             "the LO acceleration cannot send the ball back (eq. 5 check)")
+    n_merged = int(table["merged"].sum())
+    if n_merged:
+        warnings.append(f"{n_merged} pulse(s) fit worse than the pulse model allows (merged=True):"
+                        " probably unresolved re-impacts (chatter) counted as one impact")
     if clip.any():
         warnings.append(f"{int(clip.sum())} clipped acceleration sample(s): pulse areas of "
                         "clipped impacts are fitted on the unclipped samples (reliable=False)")
@@ -724,13 +742,13 @@ class _Fitter:
             dropped += 1
         return dropped
 
-    def table(self, t0, resid, sigma, knorm, clip, nan) -> dict:
+    def table(self, t0, resid, sigma, knorm, clip, nan, model_error) -> dict:
         fs, n = self.fs, self.n_samples
         if self.n == 0:
             return empty_columns({"t": float, "side": "<U5", "dv": float, "area": float,
                                   "snr": float, "peak": float, "sample": np.int64,
                                   "reliable": bool, "clipped": bool, "dropout": bool,
-                                  "side_check": bool})
+                                  "side_check": bool, "merged": bool})
         c, d = self._split()
         p = self.pad
         rpad = np.concatenate([np.zeros(p), resid, np.zeros(p)])
@@ -752,7 +770,20 @@ class _Fitter:
             "clipped": cpad[win].any(axis=1),
             "dropout": npad[win].any(axis=1),
             "side_check": np.ones(self.n, dtype=bool),
+            "merged": self._misfit(rpad, win, sigma, model_error),
         }
+
+    def _misfit(self, rpad, win, sigma, model_error) -> np.ndarray:
+        """Pulses whose fit leaves a residual beyond noise and model error: unresolved.
+
+        The RMS residual over the fit window is compared with the noise plus
+        ``model_error`` times the pulse's peak (the shape error of the model); above
+        ``_MERGED`` times that, a second pulse (chatter closer than the band limit
+        resolves) most likely hides in it.
+        """
+        rms = np.sqrt(np.mean(rpad[win] ** 2, axis=1))
+        expected = np.hypot(sigma, model_error * np.abs(self.amp) * self.pulse.peak(self.fs))
+        return rms > _MERGED * expected
 
 
 def _fit_windows(Y, W, grid, basis, Qm, pulse, fs, jl):

@@ -146,7 +146,7 @@ class AnalysisResult:
         r = self.restitution.columns
         cols = {"t": d["t"], "side": d["side"], "dv": d["dv"], "area": d["area"],
                 "snr": d["snr"], "reliable": d["reliable"], "clipped": d["clipped"],
-                "dropout": d["dropout"], "side_check": d["side_check"]}
+                "dropout": d["dropout"], "side_check": d["side_check"], "merged": d["merged"]}
         for k in ("x", "y", "v_minus", "v_plus", "w_minus", "w_plus", "u_minus", "u_plus"):
             cols[k] = s[k]
         cols.update({"r": r["r"], "r_status": r["status"], "r_used": r["used"],
