@@ -115,18 +115,17 @@ def pulse_kernel(dt_samples: np.ndarray, sample_rate: float, cutoff: float, tau:
     return np.tensordot(lowpass(dt_samples[..., None] - s), p, axes=([-1], [0]))
 
 
-@functools.lru_cache(maxsize=512)
-def _poles(kind: str, order: int, cutoff: float) -> tuple[np.ndarray, np.ndarray]:
-    """Poles (1/sample) and residues of the unit-DC-gain all-pole low-pass."""
+@functools.lru_cache(maxsize=64)
+def _unit_poles(kind: str, order: int) -> tuple[np.ndarray, np.ndarray]:
+    """Poles and residues (unit DC gain) of the low-pass at 1 rad per sample."""
     from scipy import signal
 
-    wc = 2 * math.pi * cutoff
     if kind == "butter":
-        _, p, k = signal.butter(order, wc, analog=True, output="zpk")
+        _, p, k = signal.butter(order, 1.0, analog=True, output="zpk")
     elif kind == "bessel":
-        _, p, k = signal.bessel(order, wc, analog=True, output="zpk", norm="phase")
+        _, p, k = signal.bessel(order, 1.0, analog=True, output="zpk", norm="phase")
     elif kind == "cheby1":
-        _, p, k = signal.cheby1(order, CHEBY1_RIPPLE_DB, wc, analog=True, output="zpk")
+        _, p, k = signal.cheby1(order, CHEBY1_RIPPLE_DB, 1.0, analog=True, output="zpk")
     else:
         raise InputError(f"{kind!r} is not a causal anti-alias kind ({', '.join(CAUSAL_KINDS)})")
     p = np.asarray(p, dtype=complex)
@@ -135,6 +134,17 @@ def _poles(kind: str, order: int, cutoff: float) -> tuple[np.ndarray, np.ndarray
     p.flags.writeable = False
     res.flags.writeable = False
     return p, res
+
+
+def _poles(kind: str, order: int, cutoff: float) -> tuple[np.ndarray, np.ndarray]:
+    """Poles (1/sample) and residues of the unit-DC-gain all-pole low-pass.
+
+    A low-pass at ``wc`` is the one at 1 rad/sample with time scaled by ``wc``:
+    poles and residues scale by ``wc``.
+    """
+    p, res = _unit_poles(kind, int(order))
+    wc = 2 * math.pi * cutoff
+    return p * wc, res * wc
 
 
 def _exp_outer(t: np.ndarray, p: np.ndarray) -> np.ndarray:
