@@ -170,4 +170,5 @@ def test_summary_carries_the_learned_response():
     assert pr["learned"] and pr["kind"] == "butter" and pr["order"] == 4
     assert pr["cutoff_hz"] == pytest.approx(2500, rel=0.05)
     assert 150e-6 < pr["delay"] < 300e-6
+    assert 150e-6 < pr["width"] < 250e-6             # FWHM of the model: 192 us
     assert pr["n_pulses"] >= 20 and pr["misfit"] < 0.05

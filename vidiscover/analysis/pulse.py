@@ -309,12 +309,13 @@ class PulseResponse:
 
     @property
     def width(self) -> float:
-        """Full width at half maximum of the template (s)."""
-        g, t = self.template, self.template_t
-        if g.size == 0:
-            return float("nan")
+        """Full width at half maximum of the model response (s)."""
+        fs = self.sample_rate
+        span = self.model.span(fs) / fs
+        t = np.linspace(-span, 2 * span, 6001)
+        g = self.model.response(t, fs)
         above = t[g >= 0.5 * g.max()]
-        return float(above[-1] - above[0]) if above.size else float("nan")
+        return float(above[-1] - above[0])
 
     def to_dict(self) -> dict:
         """JSON-ready summary: ``kind``, ``order``, ``cutoff_hz``, ``tau``, ``delay``, ..."""
