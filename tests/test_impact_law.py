@@ -78,7 +78,7 @@ def test_synthetic_forms_recovered_over_seeds(law):
     hits, errors = 0, []
     for seed in range(10):
         v, r, truth = synthetic(law, seed)
-        res = discover_impact_law(v, r, seed=seed, n_bootstrap=0)
+        res = discover_impact_law(v, r, seed=seed, n_boot=0)
         hits += exact_form(res.law, truth)
         errors.append(max_error(res, truth))
     assert hits >= 9, f"{law}: form recovered in {hits}/10"
@@ -89,7 +89,7 @@ def test_intervals_cover_the_true_coefficients():
     covered = 0
     for seed in range(10):
         v, r, _ = synthetic("linear:0.95:0.2", 100 + seed, n=150)
-        res = discover_impact_law(v, r, seed=seed, n_bootstrap=100)
+        res = discover_impact_law(v, r, seed=seed, n_boot=100)
         assert res.terms == ("1", "v")
         lo0, hi0 = res.ci["1"]
         lo1, hi1 = res.ci["v"]
@@ -101,10 +101,10 @@ def test_intervals_cover_the_true_coefficients():
 
 def test_comparison_with_a_constant_r():
     v, r, _ = synthetic("power:0.3:0.5", 3)
-    dep = discover_impact_law(v, r, n_bootstrap=0)
+    dep = discover_impact_law(v, r, n_boot=0)
     assert dep.delta_aicc_vs_constant > 10 and dep.p_value_vs_constant < 1e-6
     v, r, _ = synthetic("0.85", 3)
-    const = discover_impact_law(v, r, n_bootstrap=0)
+    const = discover_impact_law(v, r, n_boot=0)
     assert not const.velocity_dependent
     assert const.delta_aicc_vs_constant < 4 and const.p_value_vs_constant > 1e-3
     assert const.alternative                      # the best rival is named
@@ -117,44 +117,44 @@ def test_weights_and_outlier_rejection_stop_chatter_faking_a_law():
     sigma = 2e-4 / v
     r = 0.3 + rng.normal(0.0, 1.0, v.size) * sigma
     r[:6] += 0.5                                  # missed re-impacts: r way off
-    res = discover_impact_law(v, r, sigma=sigma, n_bootstrap=0)
+    res = discover_impact_law(v, r, sigma=sigma, n_boot=0)
     assert res.formula == "r = 0.3" and res.n_outliers >= 6
     assert res.n + res.n_outliers == v.size
-    naive = discover_impact_law(v, r, n_bootstrap=0, outlier_z=None)
+    naive = discover_impact_law(v, r, n_boot=0, outlier_z=None)
     assert abs(naive.predict(0.05) - 0.3) > abs(res.predict(0.05) - 0.3)
 
 
 def test_same_seed_same_result_and_json_ready():
     v, r, _ = synthetic("linear:0.95:0.2", 5)
-    a = discover_impact_law(v, r, seed=4, n_bootstrap=30)
-    b = discover_impact_law(v, r, seed=4, n_bootstrap=30)
+    a = discover_impact_law(v, r, seed=4, n_boot=30)
+    b = discover_impact_law(v, r, seed=4, n_boot=30)
     assert np.array_equal(a.boot_coefficients, b.boot_coefficients)
     assert a.to_dict() == b.to_dict()
     doc = json.loads(json.dumps(a.to_dict(), allow_nan=False))
-    assert doc["formula"] == a.formula and doc["n_bootstrap"] == 30
+    assert doc["formula"] == a.formula and doc["n_boot"] == 30
 
 
 def test_cv_criterion_also_recovers_the_form():
     v, r, truth = synthetic("power:0.3:0.5", 11)
     groups = np.arange(v.size) % 4
-    res = discover_impact_law(v, r, groups=groups, criterion="cv", n_bootstrap=0)
+    res = discover_impact_law(v, r, groups=groups, criterion="cv", n_boot=0)
     assert exact_form(res.law, truth)
 
 
 def test_degenerate_inputs_fall_back_with_a_warning():
-    few = discover_impact_law([0.5, 0.6, 0.7], [0.8, 0.8, 0.8], n_bootstrap=10)
+    few = discover_impact_law([0.5, 0.6, 0.7], [0.8, 0.8, 0.8], n_boot=10)
     assert few.kind == "constant" and "min_impacts" in few.warning
     v = np.full(30, 0.5) + np.linspace(0, 0.01, 30)
-    narrow = discover_impact_law(v, np.full(30, 0.7), n_bootstrap=0)
+    narrow = discover_impact_law(v, np.full(30, 0.7), n_boot=0)
     assert narrow.kind == "constant" and "span" in narrow.warning
-    none = discover_impact_law([np.nan], [0.5], n_bootstrap=0)
+    none = discover_impact_law([np.nan], [0.5], n_boot=0)
     assert none.kind == "undetermined" and none.n == 0 and none.n_dropped == 1
 
 
 @pytest.mark.parametrize(("kwargs", "match"), [
     ({"v": [0.1, 0.2], "r": [0.5]}, "same length"),
     ({"v": [-0.1] * 10, "r": [0.5] * 10}, "impact speeds >= 0"),
-    ({"n_bootstrap": -1}, "n_bootstrap must be an integer >= 0"),
+    ({"n_boot": -1}, "n_boot must be an integer >= 0"),
     ({"criterion": "bic"}, "criterion must be one of"),
     ({"terms": ["v^3"]}, "unknown impact term"),
     ({"sigma": [0.1]}, "one standard error per impact"),
@@ -187,17 +187,24 @@ def _recordings(case, seed: int, sensors: SensorConfig | None = None):
 
 @pytest.mark.parametrize("case", CASES[:2], ids=lambda c: "/".join(c))
 def test_simulated_clearance_sweep_recovers_each_wall(case):
-    res = discover(_recordings(case, seed=1), n_bootstrap=50, flight=False)
+    """Exact forms, except the right wall's 0.95 - 0.12 v: over its speeds
+    (0.55-0.75 m/s) it stays within min_effect / 2 = 0.002 of 1 - 0.159 v^0.5, and
+    the sparser form is reported (forms are not resolved below that tolerance)."""
+    res = discover(_recordings(case, seed=1), n_boot=50, flight=False)
     for side, spec in zip(("right", "left"), case, strict=True):
         law, truth = res.impact_laws[side], RestitutionLaw.parse(spec)
-        assert exact_form(law.law, truth), f"{side}: {law.formula} for {truth.formula}"
+        if side == "right" and spec == "linear:0.95:0.12":
+            assert law.velocity_dependent and max_error(law, truth) < 0.003, law.formula
+        else:
+            assert exact_form(law.law, truth), f"{side}: {law.formula} for {truth.formula}"
         assert max_error(law, truth) < R_TOL
         assert law.n >= 60 and set(res.impact_data[side]["group"]) == {0, 1, 2}
         lo, _, hi = law.band(np.linspace(*law.speed_range, 20))
         assert np.all(hi - lo < 0.02)
     summary = res.summary()
     assert summary["impact_law"]["right"]["formula"] == res.impact_laws["right"].formula
-    assert summary["n_recordings"] == 3 and summary["flight"] is None
+    assert summary["n_recordings"] == 3 and summary["flight"]["identified"] is False
+    assert summary["flight"]["mu"] is None and summary["flight"]["reason"]
 
 
 @pytest.mark.slow
@@ -205,7 +212,7 @@ def test_simulated_form_recovery_rate_over_seeds():
     hits, total, worst = 0, 0, 0.0
     for case in CASES:
         for seed in range(5):
-            res = discover(_recordings(case, seed), n_bootstrap=0, flight=False)
+            res = discover(_recordings(case, seed), n_boot=0, flight=False)
             for side, spec in zip(("right", "left"), case, strict=True):
                 truth = RestitutionLaw.parse(spec)
                 hits += exact_form(res.impact_laws[side].law, truth)
@@ -230,9 +237,9 @@ def test_identified_friction_is_used_for_the_impact_laws():
     fx = Effects.parse(["coulomb_friction=0.3", "asymmetric_restitution=0.88,0.88"])
     recs = [record(simulate(preset("paper", b=b), fx, settle=5.0, duration=3.0), seed=k)[0]
             for k, b in enumerate(CLEARANCES)]
-    refined = discover(recs, n_bootstrap=0)
+    refined = discover(recs, n_boot=0)
     assert refined.flight is not None and refined.mu_impacts == pytest.approx(0.3, abs=0.03)
-    naive = discover(recs, n_bootstrap=0, refine_mu=False)
+    naive = discover(recs, n_boot=0, refine_mu=False)
     assert naive.mu_impacts == 0.0
     for side in ("right", "left"):
         grid = np.linspace(*refined.impact_laws[side].speed_range, 50)
@@ -240,18 +247,156 @@ def test_identified_friction_is_used_for_the_impact_laws():
         assert np.max(np.abs(naive.impact_laws[side].predict(grid) - 0.88)) > 5 * R_TOL
 
 
-def test_min_effect_trades_form_resolution_for_robustness():
-    """A 5e-4 offset (a sensor bias) decides the form under AICc, not with a tolerance;
-    the same tolerance merges linear and sqrt laws over a narrow speed band."""
-    rng = np.random.default_rng(0)
-    v = rng.uniform(0.02, 0.8, 300)
-    r = 0.9995 - 0.9 * v ** 0.2 + rng.normal(0.0, 1e-4, v.size)
-    assert discover_impact_law(v, r, n_bootstrap=0).kind != "power"
-    tol = discover_impact_law(v, r, n_bootstrap=0, min_effect=2e-3)
-    assert exact_form(tol.law, RestitutionLaw.parse("power:0.9:0.2"))
-    v = rng.uniform(0.57, 0.72, 120)
-    r = 0.95 - 0.12 * v + rng.normal(0.0, 1e-4, v.size)
-    assert discover_impact_law(v, r, n_bootstrap=0).kind == "linear"
-    merged = discover_impact_law(v, r, n_bootstrap=0, min_effect=2e-3)
-    assert merged.kind == "power" and max_error(merged, RestitutionLaw.parse(
-        "linear:0.95:0.12")) < 2e-3
+# ---------------------------------------------------------------- no false discoveries
+#: Constant-r walls recorded with seeds that the calibration of MIN_EFFECT and
+#: EFFECT_PER_SCATTER did not see (tuning: 1000 * {0..3} + k; here 1000 * {20, 21} + k).
+CONSTANT_CASES = (((0.88, 0.5), 1.0), ((0.7, 0.3), 3.0), ((0.95, 0.8), 10.0))
+
+
+@functools.cache
+def _constant_sims(walls: tuple[float, float], resonance: bool = True):
+    fx = Effects.parse([f"asymmetric_restitution={walls[0]},{walls[1]}"]
+                       + (["sensor_resonance"] if resonance else []))
+    return tuple(simulate(preset("paper", b=b), fx, settle=5.0, duration=5.12)
+                 for b in CLEARANCES)
+
+
+def _constant_discovery(walls, noise: float, seed: int):
+    sensors = SensorConfig().scaled_noise(noise)
+    recs = [record(s, sensors, seed=1000 * seed + k)[0]
+            for k, s in enumerate(_constant_sims(walls))]
+    return discover(recs, n_boot=0, flight=False)
+
+
+@pytest.mark.parametrize(("walls", "noise"), CONSTANT_CASES[:1])
+def test_constant_r_with_sensor_resonance_is_reported_constant(walls, noise):
+    """AICc alone calls these walls speed-dependent (sensor resonance biases r by
+    ~1e-3); the effect rule reports a constant, within 0.01 of the truth."""
+    res = _constant_discovery(walls, noise, seed=20)
+    for side, r_true in zip(("right", "left"), walls, strict=True):
+        law = res.impact_laws[side]
+        assert law.kind == "constant", f"{side}: {law.formula} ({law.note})"
+        assert abs(law.coefficients["1"] - r_true) < 0.01
+        assert law.effect == 0.0 and law.effect_threshold >= 0.004
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize(("walls", "noise"), CONSTANT_CASES)
+@pytest.mark.parametrize("seed", [20, 21])
+def test_constant_r_is_constant_on_held_back_seeds(walls, noise, seed):
+    res = _constant_discovery(walls, noise, seed)
+    for side in ("right", "left"):
+        law = res.impact_laws[side]
+        assert law.kind == "constant", f"{side}: {law.formula} ({law.note})"
+
+
+def _speeds(seed: int, n: int = 200):
+    """Impact speeds like a pooled clearance sweep (m/s) and a seeded generator."""
+    rng = np.random.default_rng(seed)
+    return rng.uniform(0.3, 0.9, n), rng
+
+
+def test_linear_law_is_found_speed_dependent():
+    """r = 0.95 - 0.15 v at a scatter of 0.004: linear, within 0.005 of the truth."""
+    for seed in range(5):
+        v, rng = _speeds(seed)
+        res = discover_impact_law(v, 0.95 - 0.15 * v + rng.normal(0, 0.004, v.size),
+                                  n_boot=0, seed=seed)
+        assert res.kind == "linear" and res.velocity_dependent, res.formula
+        assert res.effect > res.effect_threshold
+        assert max_error(res, RestitutionLaw.parse("linear:0.95:0.15")) < 0.005
+
+
+def test_hunt_crossley_law_is_found_with_its_alpha():
+    """Exact Hunt-Crossley restitution, alpha = 0.35 s/m (the independent P02 walls)."""
+    from vidiscover.discovery.impact_terms import hunt_crossley_restitution
+
+    for seed in range(5):
+        v, rng = _speeds(seed)
+        r = hunt_crossley_restitution(0.35 * v) + rng.normal(0, 0.004, v.size)
+        res = discover_impact_law(v, r, n_boot=0, seed=seed)
+        assert res.kind == "hunt-crossley", res.formula
+        alpha = res.coefficients["hunt_crossley(alpha v)"]
+        assert abs(alpha - 0.35) < 0.01
+        grid = np.linspace(*res.speed_range, 50)
+        assert np.max(np.abs(res.predict(grid) - hunt_crossley_restitution(0.35 * grid))) \
+            < 0.004
+
+
+def test_hunt_crossley_shape_matches_its_closed_forms():
+    """r_HC(x) against a root of the implicit relation and its series 1 - x + x^2."""
+    from scipy.optimize import brentq
+
+    from vidiscover.discovery.impact_terms import hunt_crossley_restitution
+
+    for x in (0.02, 0.1, 0.3, 1.0, 3.0):
+        s = 1.5 * x
+        ref = brentq(lambda q, s=s: s - np.log1p(s) + q * s + np.log1p(-q * s),
+                     1e-9, (1 - 1e-12) / max(s, 1.0))
+        assert abs(float(hunt_crossley_restitution(x)) - ref) < 1e-9
+    x = np.array([1e-3, 5e-3])
+    assert np.allclose(hunt_crossley_restitution(x), 1 - x + x ** 2, atol=2e-8)
+
+
+def test_power_033_outside_the_library_is_reported_as_a_neighbour():
+    """r = 1 - 0.3 v^0.33 is not in the library. What it reports (measured, 5 seeds):
+    a two-parameter neighbour ``r0 + c f(v)`` such as ``r = 1.08 - 0.38 v^0.25`` or
+    ``r = 0.61 + 0.25 exp(-v)`` (kind "generic": no one-parameter power law fits
+    within the AICc window), speed-dependent, its curve
+    within 0.004 of the truth over the observed speeds; the band at 1.4 x the
+    fastest speed still holds the truth."""
+    truth = RestitutionLaw("power", a=0.3, p=0.33)
+    for seed in range(5):
+        v, rng = _speeds(seed)
+        res = discover_impact_law(v, truth(v) + rng.normal(0, 0.004, v.size), n_boot=50,
+                                  seed=seed)
+        assert res.velocity_dependent and res.kind == "generic", res.formula
+        assert len(res.terms) == 2 and res.terms[0] == "1", res.formula
+        assert max_error(res, truth) < 0.004, res.formula
+        far = 1.4 * res.speed_range[1]
+        lo, _, hi = res.band(np.array([far]))
+        assert lo[0] <= truth(far) <= hi[0], (lo, truth(far), hi)
+
+
+def test_band_widens_outside_the_observed_speeds():
+    for law, spec in (("constant", "0.8"), ("linear", "linear:0.95:0.15")):
+        v, rng = _speeds(3)
+        res = discover_impact_law(v, RestitutionLaw.parse(spec)(v)
+                                  + rng.normal(0, 0.004, v.size), n_boot=100, seed=3)
+        assert res.kind == law
+        v0, v1 = res.speed_range
+        lo, mid, hi = res.band(np.array([0.5 * v0, 0.5 * (v0 + v1), 1.4 * v1]))
+        width = hi - lo
+        assert width[0] > 2 * width[1] and width[2] > 2 * width[1], width
+        assert np.all(lo <= mid) and np.all(mid <= hi)
+        band = res.to_dict()["band"]
+        assert band["v"][0] == pytest.approx(0.6 * v0) and band["v"][-1] == \
+            pytest.approx(1.4 * v1)
+        assert len(band["lo"]) == len(band["hi"]) == len(band["v"])
+
+
+def test_small_effect_is_not_reported_and_the_note_says_why():
+    """A 0.002 change of r over the speeds, resolved by AICc (scatter 1e-4), stays
+    below min_effect: constant, with a note; min_effect=0 reports it."""
+    v, rng = _speeds(4, n=300)
+    r = 0.8 - 0.003 * v + rng.normal(0, 1e-4, v.size)
+    res = discover_impact_law(v, r, n_boot=0)
+    assert res.kind == "constant" and "below the reporting threshold" in res.note
+    assert res.delta_aicc_vs_constant > 10
+    strict = discover_impact_law(v, r, n_boot=0, min_effect=0.0)
+    assert strict.velocity_dependent and strict.note is None
+    with pytest.raises(InputError, match="min_effect must be a number >= 0"):
+        discover_impact_law(v, r, min_effect=-1.0)
+
+
+def test_json_keeps_terms_and_coefficients_machine_readable():
+    v, rng = _speeds(5)
+    res = discover_impact_law(v, 0.95 - 0.15 * v + rng.normal(0, 0.004, v.size), n_boot=20)
+    doc = json.loads(json.dumps(res.to_dict(), allow_nan=False))
+    assert doc["terms"] == ["1", "v"] and doc["formula"] == res.formula
+    assert set(doc["coefficients"]) == {"1", "v"}
+    assert doc["coefficients"]["v"]["value"] == pytest.approx(res.coefficients["v"])
+    for key in ("speed_range", "band", "effect", "effect_threshold", "precision", "n_boot",
+                "note", "kind", "law", "candidates"):
+        assert key in doc, key
+    assert doc["n_boot"] == 20 and doc["effect"] > doc["effect_threshold"]

@@ -39,7 +39,10 @@ ways: ``r = sum_k c_k f_k(v)`` (free intercept) and ``1 - r = sum_k c_k f_k(v)``
    ``max(min_effect, EFFECT_PER_SCATTER * precision)``, ``precision`` being the
    weighted RMS scatter of the r estimates about the best law; otherwise the
    constant is reported and :attr:`ImpactLawResult.note` says what was below the
-   threshold. The defaults are calibrated on constant-r data (see
+   threshold. ``min_effect / 2`` also makes forms whose curves differ by less than it
+   over the observed speeds equivalent (the sparsest, physical one is reported:
+   a 0.2 % bias of the r estimates then does not turn ``1 - a v^p`` into
+   ``1.002 - a v^p``). The defaults are calibrated on constant-r data (see
    :data:`MIN_EFFECT`).
 3. **Uncertainty.** Impacts are resampled with ``numpy.random.default_rng(seed)``;
    each resample refits the chosen terms (coefficient percentile CIs, pointwise
@@ -258,16 +261,19 @@ def _tier(cand: _Candidate, nested: frozenset[_Candidate]) -> int:
 
 def _select(cands: Sequence[_Candidate], tiers: np.ndarray, aicc: np.ndarray,
             cv_mse: np.ndarray, cv_se: np.ndarray, criterion: str, window: float,
-            effects: np.ndarray, threshold: float) -> int:
+            curves: np.ndarray, threshold: float, tolerance: float) -> int:
     """Index of the selected candidate (0 is the constant).
 
     Adequate: within the AICc window (or the CV one-SE rule) of the best. The
     constant wins when it is adequate, or when the best candidate's effect over the
-    observed speeds (``effects``) is below ``threshold``; otherwise the sparsest
-    adequate candidate whose effect reaches ``threshold`` (then lowest tier, then
-    lowest AICc).
+    observed speeds (max - min of its row of ``curves``) is below ``threshold``.
+    Otherwise a speed-dependent candidate is also adequate when its curve stays
+    within ``tolerance`` (``min_effect / 2``) of the best one everywhere (systematic
+    differences below it are not resolved), and the sparsest adequate candidate whose
+    effect reaches ``threshold`` wins (then lowest tier, then lowest AICc).
     """
     n_params = np.array([c.n_params for c in cands])
+    effects = np.ptp(curves, axis=1)
     if criterion == "cv" and np.isfinite(cv_mse).any():
         best = int(np.nanargmin(cv_mse))
         ok = cv_mse <= cv_mse[best] + (cv_se[best] if np.isfinite(cv_se[best]) else 0.0)
@@ -276,6 +282,8 @@ def _select(cands: Sequence[_Candidate], tiers: np.ndarray, aicc: np.ndarray,
         ok = np.isfinite(aicc) & (aicc <= aicc[best] + window)
     if ok[0] or not cands[best].velocity_dependent or effects[best] < threshold:
         return 0
+    ok |= np.isfinite(aicc) & (np.max(np.abs(curves - curves[best]), axis=1) <= tolerance)
+    ok[0] = False
     idx = np.flatnonzero(ok & (effects >= threshold))
     key = np.lexsort((aicc[idx], tiers[idx], n_params[idx]))
     return int(idx[key[0]])
@@ -501,7 +509,8 @@ def discover_impact_law(v, r, *, seed: int = 0, n_boot: int = 200, groups=None,
         Smallest effect of a reported speed dependence: the max - min of the fitted
         law over the observed speeds must reach ``max(min_effect,
         EFFECT_PER_SCATTER * precision)`` (``precision``: weighted RMS scatter of r
-        about the best law), else the constant is reported. Default
+        about the best law), else the constant is reported; speed-dependent forms
+        whose curves differ by less than ``min_effect / 2`` are equivalent. Default
         :data:`MIN_EFFECT`, calibrated on constant-r data; 0 leaves only the
         scatter rule.
 
@@ -614,17 +623,17 @@ def discover_impact_law(v, r, *, seed: int = 0, n_boot: int = 200, groups=None,
             cvs = np.full((len(cands), 3), np.nan)
         curves = np.array([design.predict(c, f[0], grid)
                            for c, f in zip(cands, fits, strict=True)])
-        effects = np.ptp(curves, axis=1)
         best = int(np.argmin(aicc))
         w = sw ** 2 if rows is None else sw[rows] ** 2
         precision = math.sqrt(rss[best] / float(np.sum(w)))
         threshold = max(min_effect, EFFECT_PER_SCATTER * precision)
-        return rss, aicc, cvs, effects, threshold, precision
+        return rss, aicc, cvs, curves, threshold, precision
 
-    rss, aicc, cvs, effects, threshold, precision = score()
+    rss, aicc, cvs, curves, threshold, precision = score()
+    effects = np.ptp(curves, axis=1)
     tiers = np.array([_tier(c, frozenset(nested)) for c in cands])
     best = _select(cands, tiers, aicc, cvs[:, 1], cvs[:, 2], criterion, aicc_window,
-                   effects, threshold)
+                   curves, threshold, min_effect / 2)
     chosen = cands[best]
     coef, _ = design.fit(chosen, r)
 
@@ -632,9 +641,9 @@ def discover_impact_law(v, r, *, seed: int = 0, n_boot: int = 200, groups=None,
     picks = np.zeros(len(cands))
     for b, rows in enumerate(bootstrap_rows(n, n_boot, rng)):
         boot[b] = design.fit(chosen, r, rows)[0]
-        _, a_b, c_b, e_b, t_b, _ = score(rows)
+        _, a_b, c_b, k_b, t_b, _ = score(rows)
         picks[_select(cands, tiers, a_b, c_b[:, 1], c_b[:, 2], criterion,
-                      aicc_window, e_b, t_b)] += 1
+                      aicc_window, k_b, t_b, min_effect / 2)] += 1
     freq = picks / n_boot if n_boot else np.full(len(cands), np.nan)
 
     # comparison with a constant r

@@ -161,11 +161,12 @@ def hunt_crossley_restitution(x) -> np.ndarray:
     from scipy.special import lambertw
 
     x = np.abs(np.asarray(x, dtype=float))
-    s = 1.5 * x
-    out = 1.0 - x + x ** 2                      # series, exact to O(s^3) below s = 0.01
+    flat = x.reshape(-1)
+    s = 1.5 * flat
+    out = 1.0 - flat + flat ** 2                # series, exact to O(s^3) below s = 0.01
     big = s >= 1e-2
     if np.any(big):
         sb = s[big]
         w = lambertw(-np.exp(-(1.0 + sb - np.log1p(sb))), 0).real
         out[big] = (1.0 + w) / sb
-    return out
+    return out.reshape(x.shape)
