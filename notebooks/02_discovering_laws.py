@@ -65,7 +65,7 @@ for k, b in enumerate((0.006, 0.0075, 0.009)):
 # --out DIR`.
 
 # %%
-result = discover(recordings, seed=0, n_bootstrap=N_BOOT)
+result = discover(recordings, seed=0, n_boot=N_BOOT)
 print("\n".join(result.equations()))
 
 # %% [markdown]

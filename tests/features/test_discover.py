@@ -41,7 +41,7 @@ def _run(rig, extra=()):
     rig["out"] = rig["dir"] / "out"
     rig["result"] = CliRunner().invoke(
         main, ["discover", *rig["paths"], *extra, "--out", str(rig["out"]), "--json",
-               "--n-bootstrap", "30", "--no-figures"])
+               "--n-boot", "30", "--no-figures"])
 
 
 @when("I run discover on them")

@@ -39,10 +39,10 @@ ways: ``r = sum_k c_k f_k(v)`` (free intercept) and ``1 - r = sum_k c_k f_k(v)``
    ``max(min_effect, EFFECT_PER_SCATTER * precision)``, ``precision`` being the
    weighted RMS scatter of the r estimates about the best law; otherwise the
    constant is reported and :attr:`ImpactLawResult.note` says what was below the
-   threshold. ``min_effect / 2`` also makes forms whose curves differ by less than it
-   over the observed speeds equivalent (the sparsest, physical one is reported:
-   a 0.2 % bias of the r estimates then does not turn ``1 - a v^p`` into
-   ``1.002 - a v^p``). The defaults are calibrated on constant-r data (see
+   threshold. A law ``1 - a f(v)`` within ``min_effect / 2`` of the best
+   ``r0 + c f(v)`` over the observed speeds is also adequate (and sparser): a 0.2 %
+   bias of the r estimates then does not turn ``1 - a v^p`` into
+   ``1.002 - a v^p``. The defaults are calibrated on constant-r data (see
    :data:`MIN_EFFECT`).
 3. **Uncertainty.** Impacts are resampled with ``numpy.random.default_rng(seed)``;
    each resample refits the chosen terms (coefficient percentile CIs, pointwise
@@ -267,9 +267,10 @@ def _select(cands: Sequence[_Candidate], tiers: np.ndarray, aicc: np.ndarray,
     Adequate: within the AICc window (or the CV one-SE rule) of the best. The
     constant wins when it is adequate, or when the best candidate's effect over the
     observed speeds (max - min of its row of ``curves``) is below ``threshold``.
-    Otherwise a speed-dependent candidate is also adequate when its curve stays
-    within ``tolerance`` (``min_effect / 2``) of the best one everywhere (systematic
-    differences below it are not resolved), and the sparsest adequate candidate whose
+    Otherwise the intercept-1 version of the best law (``1 - a f(v)`` for a best
+    ``r0 + c f(v)``) is also adequate when its curve stays within ``tolerance``
+    (``min_effect / 2``) of the best one everywhere (a bias of the r estimates below
+    it does not decide the form), and the sparsest adequate candidate whose
     effect reaches ``threshold`` wins (then lowest tier, then lowest AICc).
     """
     n_params = np.array([c.n_params for c in cands])
@@ -282,8 +283,10 @@ def _select(cands: Sequence[_Candidate], tiers: np.ndarray, aicc: np.ndarray,
         ok = np.isfinite(aicc) & (aicc <= aicc[best] + window)
     if ok[0] or not cands[best].velocity_dependent or effects[best] < threshold:
         return 0
-    ok |= np.isfinite(aicc) & (np.max(np.abs(curves - curves[best]), axis=1) <= tolerance)
-    ok[0] = False
+    near = np.max(np.abs(curves - curves[best]), axis=1) <= tolerance
+    same = np.array([c.fixed_intercept and set(c.r_terms) == set(cands[best].r_terms)
+                     for c in cands])
+    ok |= np.isfinite(aicc) & near & same
     idx = np.flatnonzero(ok & (effects >= threshold))
     key = np.lexsort((aicc[idx], tiers[idx], n_params[idx]))
     return int(idx[key[0]])
@@ -509,8 +512,9 @@ def discover_impact_law(v, r, *, seed: int = 0, n_boot: int = 200, groups=None,
         Smallest effect of a reported speed dependence: the max - min of the fitted
         law over the observed speeds must reach ``max(min_effect,
         EFFECT_PER_SCATTER * precision)`` (``precision``: weighted RMS scatter of r
-        about the best law), else the constant is reported; speed-dependent forms
-        whose curves differ by less than ``min_effect / 2`` are equivalent. Default
+        about the best law), else the constant is reported; ``1 - a f(v)`` is
+        preferred to ``r0 + c f(v)`` when their curves differ by less than
+        ``min_effect / 2``. Default
         :data:`MIN_EFFECT`, calibrated on constant-r data; 0 leaves only the
         scatter rule.
 
