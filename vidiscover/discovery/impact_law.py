@@ -31,6 +31,9 @@ ways: ``r = sum_k c_k f_k(v)`` (free intercept) and ``1 - r = sum_k c_k f_k(v)``
    false speed dependences of a constant r near 5 % despite a dozen correlated
    candidates; with the usual 2 the rate is ~10 %. ``criterion="cv"`` takes the
    sparsest candidate within one standard error of the best CV error instead.
+   Candidates whose speed-dependent terms cancel each other (their own changes
+   of r over the observed speeds add up to more than 10 times the change of the
+   law) are rejected: nearly collinear columns fitting a systematic error.
 2b. **Effect over the observed speeds.** Simulated r estimates are precise to
    ~1e-4, so AICc alone resolves systematic errors of the r estimates (the laser
    sheet's resonance, noise-induced biases at low speed) as "laws". A speed
@@ -120,6 +123,9 @@ MIN_EFFECT = 0.004
 #: start at 4.3.
 EFFECT_PER_SCATTER = 4.0
 _N_THRESHOLDS = 8
+#: A candidate whose terms' own changes of r add up to more than this many times the
+#: change of the law is a cancellation of nearly collinear columns (rejected).
+_CANCELLATION = 10.0
 #: alpha v of the Hunt-Crossley fits is tabulated on [0, 50] (interpolation error < 2e-6)
 _HC_GRID = np.linspace(0.0, 50.0, 20001)
 _HC_TABLE: list[np.ndarray] = []
@@ -290,6 +296,25 @@ def _select(cands: Sequence[_Candidate], tiers: np.ndarray, aicc: np.ndarray,
     idx = np.flatnonzero(ok & (effects >= threshold))
     key = np.lexsort((aicc[idx], tiers[idx], n_params[idx]))
     return int(idx[key[0]])
+
+
+def _cancelling(cands: Sequence[_Candidate], coefs: Sequence[np.ndarray], grid: np.ndarray,
+                effects: np.ndarray) -> np.ndarray:
+    """Candidates whose speed-dependent terms cancel each other over ``grid``.
+
+    Over a few tenths of m/s the columns ``v^0.2`` and ``v^0.25`` (say) are nearly
+    collinear, and ``1 - 2.6 v^0.2 + 2.2 v^0.25`` fits a sub-percent systematic error
+    of the r estimates. A candidate is rejected when the sum of its terms' own
+    changes over the grid exceeds :data:`_CANCELLATION` times the change of their sum.
+    """
+    out = np.zeros(len(cands), dtype=bool)
+    for i, (c, coef) in enumerate(zip(cands, coefs, strict=True)):
+        terms = [(t, k) for t, k in zip(c.r_terms, coef, strict=True) if t != CONSTANT_TERM]
+        if len(terms) < 2 or c.hunt_crossley:
+            continue
+        own = sum(abs(k) * float(np.ptp(IMPACT_TERMS[t](grid))) for t, k in terms)
+        out[i] = own > _CANCELLATION * max(float(effects[i]), 1e-12)
+    return out
 
 
 def _sweep(theta: np.ndarray, r: np.ndarray, sw: np.ndarray, names: Sequence[str],
@@ -627,6 +652,7 @@ def discover_impact_law(v, r, *, seed: int = 0, n_boot: int = 200, groups=None,
             cvs = np.full((len(cands), 3), np.nan)
         curves = np.array([design.predict(c, f[0], grid)
                            for c, f in zip(cands, fits, strict=True)])
+        aicc[_cancelling(cands, [f[0] for f in fits], grid, np.ptp(curves, axis=1))] = np.inf
         best = int(np.argmin(aicc))
         w = sw ** 2 if rows is None else sw[rows] ** 2
         precision = math.sqrt(rss[best] / float(np.sum(w)))
