@@ -251,6 +251,22 @@ class _CModel:
         return f / p.m1
 
 
+def _deflated(f, t0: float):
+    """``f(t) / (t - t0)`` with its derivative, for ``f(t0) = 0`` (a root after ``t0``).
+
+    At ``t0`` it is the limit ``f'(t0)``: a function leaving zero at ``t0`` and
+    coming back to it keeps one sign change, the return.
+    """
+    def g(t):
+        v, d = f(t)
+        tau = t - t0
+        if tau <= 0.0:
+            return d, 0.0
+        q = v / tau
+        return q, (d - q) / tau
+    return g
+
+
 class _Event:
     """A terminal solve_ivp event."""
 
@@ -452,8 +468,15 @@ class _CompliantLoop(_Loop):
                     te, kind = bracketed_newton(f, p, q, z[k] - s * b, z[k + 1] - s * b), s
                     break
                 if s * zd[k + 1] <= vb:
-                    te, kind = bracketed_newton(f_band, p, q, s * zd[k] - vb,
-                                                s * zd[k + 1] - vb), 2
+                    if k == 0 and ta == t0 and s * u0 <= vb:
+                        # started on the band's edge, leaving it: a return within the
+                        # first step is a root after t0, not the start itself
+                        fd = _deflated(f_band, t0)
+                        te = bracketed_newton(fd, p, q, fd(p)[0], fd(q)[0])
+                    else:
+                        te = bracketed_newton(f_band, p, q, s * zd[k] - vb,
+                                              s * zd[k + 1] - vb)
+                    kind = 2
                     break
             ta += n * h
         te = min(te, self.t_end)
@@ -592,8 +615,12 @@ class _CompliantLoop(_Loop):
                     def fb(s):
                         Xs, dXs = sysm.state(np.array([s]), t0, c)
                         return fs * float(Xs[0, 3]) - vb, fs * float(dXs[0, 3])
-                    tb = bracketed_newton(fb, tt[k], tt[k + 1], fs * X[k, 3] - vb,
-                                          fs * X[k + 1, 3] - vb)
+                    if k == 0 and ta == t0 and fs * X[0, 3] <= vb:   # on the band's edge
+                        fd = _deflated(fb, t0)
+                        tb = bracketed_newton(fd, tt[0], tt[1], fd(tt[0])[0], fd(tt[1])[0])
+                    else:
+                        tb = bracketed_newton(fb, tt[k], tt[k + 1], fs * X[k, 3] - vb,
+                                              fs * X[k + 1, 3] - vb)
                     if te is None or tb < te:
                         te, kind = tb, 2
                 break
