@@ -39,14 +39,14 @@ until the support and the coefficients settle. The first passes fit only the
 constant and ``sgn(z')`` (the law the reconstruction can integrate), from three
 starting laws; the fixed point that closes the rows best with its own law wins,
 and fixed points that close them about as well (AICc within ``window``) but lie
-elsewhere are reported as rivals (warning, wider intervals).
+elsewhere are rivals: mu and theta are then confounded (not identified).
 
 **What one recording can tell.** In a periodic orbit every tent sees the same
 pair of flights, so the constant and ``sgn(z')`` columns are proportional and only
 one combination of mu and theta is determined (the paper's b = 9 mm, two impacts
-per cycle): the result then carries a warning (:attr:`FlightLawResult.collinearity`)
-and wide intervals. Pooling clearances (or any recordings with different flight
-patterns, or flights in which z' changes sign) separates the two.
+per cycle): the law is then not identified (:attr:`FlightLawResult.collinearity`).
+Pooling clearances (or any recordings with different flight patterns, or flights
+in which z' changes sign) separates the two.
 
 **Selection.** A pysindy ``STLSQ`` threshold sweep proposes supports; they and
 the nested physical forms (constant, friction, both, both plus one candidate) are
