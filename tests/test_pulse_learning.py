@@ -176,8 +176,6 @@ def test_bad_learning_options_are_input_errors():
                        pulse="butter")
 
 
-@pytest.mark.xfail(strict=True, reason="vidiscover/analysis/__init__.py still imports "
-                   "vidiscover.regimes.features to register the regime features")
 def test_analysis_does_not_import_the_simulator_discovery_or_regimes():
     code = ("import vidiscover.analysis, sys; bad = [m for m in sys.modules if m.startswith("
             "('vidiscover.simulation', 'vidiscover.discovery', 'vidiscover.regimes'))]; "

@@ -53,6 +53,7 @@ def run_demo(out: Path, seed: int = 0, progress: bool = True,
     from .io import atomic_directory, write_recording
     from .params import preset
     from .plotting import plot_recording
+    from .regimes.features import ALL_FEATURES
     from .report import attach_regime, default_regime_model, write_analysis, write_index
     from .workflows import simulate_to_memory
 
@@ -72,7 +73,7 @@ def run_demo(out: Path, seed: int = 0, progress: bool = True,
             files = write_recording(rec, Path(tmp) / f"{stem}.csv", truth=truth)
             plot_recording(rec, truth, Path(tmp) / f"{stem}.png")
             outputs += [Path(f).name for f in files] + [f"{stem}.png"]
-            result, regime = attach_regime(analyze(rec, seed=seed), model)
+            result, regime = attach_regime(analyze(rec, seed=seed, features=ALL_FEATURES), model)
             written = write_analysis(result, Path(tmp) / stem, truth=truth, figures=figures,
                                      regime=regime)
             outputs += [f"{stem}/{f}" for f in written["files"]]

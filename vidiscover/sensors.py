@@ -29,8 +29,8 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
 
 import numpy as np
-from scipy.special import i0 as _i0
 
+from .acquisition import CHEBY1_RIPPLE_DB, pulse_kernel
 from .errors import InputError
 from .params import G_ACCEL
 from .recording import PAPER_SENSITIVITY, Metadata, Recording
@@ -41,8 +41,6 @@ __all__ = ["SensorConfig", "record", "pulse_kernel", "ANTI_ALIAS_KINDS"]
 
 #: Anti-alias filter kinds: the default delay-compensated FIR and causal analog designs.
 ANTI_ALIAS_KINDS = ("linear-phase", "butter", "bessel", "cheby1")
-#: Pass-band ripple of the ``cheby1`` anti-alias filter (dB).
-CHEBY1_RIPPLE_DB = 0.5
 
 
 @dataclass(frozen=True)
@@ -277,48 +275,6 @@ class SensorConfig:
     def to_dict(self) -> dict:
         """JSON-ready form (``SensorConfig(**d)`` rebuilds it)."""
         return asdict(self)
-
-
-_GAUSS16 = np.polynomial.legendre.leggauss(16)
-
-
-def pulse_kernel(dt_samples: np.ndarray, sample_rate: float, cutoff: float, tau: float,
-                 halfwidth: int) -> np.ndarray:
-    """Sampled response (1/s) of the acquisition chain to a unit-area impact pulse.
-
-    Parameters
-    ----------
-    dt_samples : ndarray
-        Sample times minus the pulse centre (s).
-    sample_rate : float
-        Sampling rate (Hz).
-    cutoff : float
-        Anti-alias cut-off as a fraction of the sampling rate.
-    tau : float
-        Contact duration (s); 0 for an instantaneous impact.
-    halfwidth : int
-        Kernel half-width (samples); the kernel is 0 beyond it.
-
-    Returns
-    -------
-    ndarray
-        Kernel values; they sum to about ``sample_rate`` (unit area).
-    """
-    fc = cutoff * sample_rate
-    span = halfwidth / sample_rate
-
-    def lowpass(t):
-        win = np.where(np.abs(t) < span, _i0(8.0 * np.sqrt(np.clip(1 - (t / span) ** 2,
-                                                                      0, None))) / _i0(8.0),
-                       0.0)
-        return 2 * fc * np.sinc(2 * fc * t) * win
-
-    if tau <= 0:
-        return lowpass(dt_samples)
-    nodes, weights = _GAUSS16
-    s = 0.5 * tau * nodes                                        # pulse on [-tau/2, tau/2]
-    p = (math.pi / (2 * tau)) * np.cos(math.pi * s / tau) * 0.5 * tau * weights
-    return np.tensordot(lowpass(dt_samples[..., None] - s), p, axes=([-1], [0]))
 
 
 def record(result: SimulationResult, sensors: SensorConfig | None = None, seed: int = 0,

@@ -234,10 +234,10 @@ def _label_of(predicted: Any) -> str:
 
 def _run_point(task: tuple[SweepSpec, Callable | None, int]) -> dict:
     """Simulate, record, label and analyse one point (runs on a worker)."""
-    # importing vidiscover.analysis registers the regime features too, so every
-    # backend computes the same feature set
+    # every backend computes the same, explicit feature set
     from .analysis import analyze
-    from .workflows import simulate_to_memory
+    from .regimes.features import ALL_FEATURES
+    from .workflows import known_pulse, simulate_to_memory
 
     spec, classify, index = task
     value = spec.values[index]
@@ -248,7 +248,8 @@ def _run_point(task: tuple[SweepSpec, Callable | None, int]) -> dict:
                                             name=f"{spec.param}={value:g}")
     regime = truth.regime
     ana = analyze(rec, mu=effects.mu, threshold=spec.threshold,
-                  n_boot=int(spec.n_boot), seed=seed)
+                  n_boot=int(spec.n_boot), seed=seed, features=ALL_FEATURES,
+                  pulse=known_pulse(None, effects))   # our own default chain: known
     t = ana.detection.t
     right, left = ana.restitution.right, ana.restitution.left
     row = {

@@ -21,7 +21,8 @@ if TYPE_CHECKING:  # pragma: no cover
     from .sensors import SensorConfig
     from .simulation import SimOptions
 
-__all__ = ["Simulated", "record_simulation", "simulate_recording", "simulate_to_memory"]
+__all__ = ["known_pulse", "Simulated", "record_simulation", "simulate_recording",
+           "simulate_to_memory"]
 
 SUFFIXES = (".csv", ".parquet", ".npz")
 
@@ -172,3 +173,27 @@ def simulate_recording(params: SystemParams, effects: Effects | Iterable[str], o
         "status": result.status,
         "message": result.message,
     }
+
+
+def known_pulse(sensors: SensorConfig | None = None, effects: Effects | None = None,
+                contact=None):
+    """The pulse response of a simulated acquisition chain, when it is known exactly.
+
+    Recordings vidiscover simulates itself (sweeps, training sets, the simulated side
+    of the gap) need not learn their instrument: the analysis is given it. Returns
+    None (learn it from the recording) for compliant walls, whose contact pulse
+    depends on the impact, and for a mounted accelerometer resonance, which the pulse
+    models do not describe.
+    """
+    from .analysis.pulse import PulseModel
+    from .sensors import SensorConfig
+
+    sensors = sensors if sensors is not None else SensorConfig()
+    if contact is not None or sensors.mount_resonance is not None:
+        return None
+    tau = effects.tau if effects is not None else 0.0
+    if sensors.anti_alias == "linear-phase":
+        return PulseModel(cutoff=sensors.fc / sensors.sample_rate,
+                          halfwidth=sensors.kernel_halfwidth, tau=tau)
+    return PulseModel(cutoff=sensors.fc / sensors.sample_rate, tau=tau,
+                      kind=sensors.anti_alias, order=sensors.aa_order)

@@ -43,7 +43,3 @@ __all__ = [
     "integrate_flights", "match_impacts", "mu_table", "reconstruct", "register_feature",
     "return_map", "solve_flights",
 ]
-
-# The regime features register themselves in FEATURES on import; importing them here
-# makes analyze() compute the same feature set whatever the caller imported first.
-from ..regimes import features as _regime_features  # noqa: E402,F401

@@ -24,7 +24,7 @@ from .impacts import ImpactDetection, detect_impacts
 from .pulse import PulseModel
 from .reconstruction import Reconstruction, reconstruct
 from .restitution import MU_TABLE, RestitutionEstimate, estimate_restitution, mu_table
-from .returnmap import FeatureContext, ReturnMap, compute_features, return_map
+from .returnmap import ANALYSIS_FEATURES, FeatureContext, ReturnMap, compute_features, return_map
 from .signals import Forcing, Offsets, estimate_offsets, fit_forcing
 
 __all__ = ["AnalysisResult", "analyze"]
@@ -162,7 +162,8 @@ class AnalysisResult:
 
 def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 5.5,
             n_boot: int = 1000, seed: int = 0, flight_law=None,
-            pulse: PulseModel | None = None, offsets: bool = True) -> AnalysisResult:
+            pulse: PulseModel | None = None, offsets: bool = True,
+            features=None) -> AnalysisResult:
     """Run stages 1-4 on a recording: impacts, reconstruction, restitution, return map.
 
     Parameters
@@ -193,6 +194,10 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 
         Estimate the accelerometer bias and the displacement zero offsets over whole
         forcing cycles and remove them before stages 2-4
         (:func:`vidiscover.analysis.signals.estimate_offsets`).
+    features : sequence of str, optional
+        Names of the registered features to compute (default: the analysis's own,
+        :data:`~vidiscover.analysis.returnmap.ANALYSIS_FEATURES`; the classifier's
+        full set is ``vidiscover.regimes.features.ALL_FEATURES``).
 
     Returns
     -------
@@ -226,13 +231,11 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 
     ctx = FeatureContext(t=det.t, side=det.side, dv=det.dv, t_start=float(rec.t[0]),
                          t_end=float(rec.t[-1]) + 1.0 / det.sample_rate, forcing=forcing,
                          ts=recon.t, x=recon.x, returnmap=rm)
-    features = compute_features(ctx)
+    features = compute_features(ctx, ANALYSIS_FEATURES if features is None else features)
     warnings = list(det.warnings)
     if forcing.source != "xe":
         warnings.append("base displacement 'xe' has no usable sine: cycles are cut with the "
                         "metadata frequency and phase 0")
-    if flight_law is not None:
-        warnings.append(f"flight law used: mu = {mu:.4g}, theta = {theta_deg:.4g} deg")
     for w in (rest.right, rest.left):
         if w.warn_slow:
             warnings.append(f"{w.side} wall: the ball is too slow for the friction "

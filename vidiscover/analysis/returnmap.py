@@ -30,7 +30,8 @@ import pandas as pd
 
 from .signals import Forcing
 
-__all__ = ["ReturnMap", "return_map", "FeatureContext", "FEATURES", "register_feature",
+__all__ = ["ReturnMap", "return_map", "FeatureContext", "FEATURES", "ANALYSIS_FEATURES",
+           "register_feature",
            "compute_features"]
 
 
@@ -378,3 +379,8 @@ def _strobe(ctx: FeatureContext) -> float:
         e = float(np.abs(xs[p:] - xs[:-p]).max() / amp) if amp > 0 else _NAN
         best = e if not (best <= e) else best
     return best
+
+
+#: The features the analysis itself defines (registered above), in registration order:
+#: what :func:`vidiscover.analysis.analyze` computes unless given another set.
+ANALYSIS_FEATURES: tuple[str, ...] = tuple(FEATURES)

@@ -154,11 +154,13 @@ def run_analyze(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
 
     from .._atomic import atomic_directory
     from ..analysis import analyze as analyze_recording
+    from ..regimes.features import ALL_FEATURES
     from ..report import attach_regime, write_analysis, write_index
 
     def one(rec, truth, target: Path) -> dict:
         result, regime = attach_regime(analyze_recording(rec, mu=mu, seed=seed,
-                                                         flight_law=law), model)
+                                                         flight_law=law,
+                                                         features=ALL_FEATURES), model)
         written = write_analysis(result, target, figures=figures, truth=truth,
                                  regime=regime)
         return {**written["summary"], "out": str(target), "files": written["files"]}

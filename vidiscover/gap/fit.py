@@ -101,13 +101,17 @@ def _simulate(model: Model, effects: Effects, r: float, ball_speed: float | None
 
 
 def _record(model: Model, result, noise_seed: int) -> Signature:
+    from ..analysis import analyze
     from ..sensors import SensorConfig
-    from ..workflows import record_simulation
+    from ..workflows import known_pulse, record_simulation
 
     xn, an, en = model.noise
     cfg = SensorConfig(sample_rate=model.sample_rate, x_noise=xn, a_noise=an, xe_noise=en)
-    return measure(record_simulation(result, cfg, seed=1000 + noise_seed,
-                                     label=False).recording)
+    rec = record_simulation(result, cfg, seed=1000 + noise_seed, label=False).recording
+    # the simulated side's instrument is known: no need to learn it
+    pulse = known_pulse(cfg, result.effects)
+    return measure(rec, analyze(rec, n_boot=0, pulse=pulse,
+                                features=("envelope_modulation",)))
 
 
 def simulate_signature(model: Model, effects: Effects, r: float | None = None, *,

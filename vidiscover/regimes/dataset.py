@@ -215,14 +215,15 @@ def simulate_case(case: Case) -> dict:
     """
     from ..analysis import analyze
     from ..analysis.returnmap import FEATURES, compute_features
-    from ..workflows import simulate_to_memory
+    from ..workflows import known_pulse, simulate_to_memory
 
     row = {f"param:{k}": v for k, v in case.to_dict().items()}
     try:
         rec, truth, res = simulate_to_memory(case.params(), case.effects(), seed=case.seed,
                                              settle=case.settle, duration=case.duration,
                                              noise=case.noise)
-        out = analyze(rec, n_boot=_N_BOOT, seed=case.seed)
+        out = analyze(rec, n_boot=_N_BOOT, seed=case.seed,
+                      pulse=known_pulse(None, case.effects()))
     except InputError as err:
         row.update(label=None, status=f"error: {err}")
         return row

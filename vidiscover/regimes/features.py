@@ -33,9 +33,9 @@ import math
 
 import numpy as np
 
-from ..analysis.returnmap import FEATURES, FeatureContext, register_feature
+from ..analysis.returnmap import ANALYSIS_FEATURES, FEATURES, FeatureContext, register_feature
 
-__all__ = ["REGIME_FEATURES", "cycle_waveforms"]
+__all__ = ["REGIME_FEATURES", "ALL_FEATURES", "cycle_waveforms"]
 
 _NAN = float("nan")
 #: Samples per cycle of the resampled LO waveform.
@@ -270,3 +270,7 @@ REGIME_FEATURES: tuple[str, ...] = (
     "quiet_run", "phase_coherence", "dt_max", "dt_min", "side_run", "returnmap_top_share",
     "returnmap_cluster_density", "dv_side_ratio", "waveform_period_error",
     "waveform_period", "strobe_dispersion", "envelope_cv")
+
+#: The analysis's own features and the regime features: the set the classifier, sweeps
+#: and the ``analyze`` command compute (``analyze(rec, features=ALL_FEATURES)``).
+ALL_FEATURES: tuple[str, ...] = ANALYSIS_FEATURES + REGIME_FEATURES
