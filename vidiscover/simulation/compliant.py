@@ -47,7 +47,8 @@ import dataclasses
 import math
 
 import numpy as np
-from scipy.integrate import solve_ivp
+from scipy.integrate import odeint, solve_ivp
+from scipy.optimize import brentq
 
 from ..effects import Effects
 from ..errors import InputError
@@ -209,7 +210,7 @@ class _CModel:
         tanh, sin, cos = math.tanh, math.sin, math.cos
 
         def f(t, X):
-            x, v, z, u = X
+            x, v, z, u = X.tolist()
             xe = vxe = 0.0
             for w, br, bi in terms:
                 sn, cs = sin(w * t), cos(w * t)
@@ -234,8 +235,48 @@ class _CModel:
             return [v, a, u, fb / m2 + gs - a]
         return f
 
-    def accel(self, t, x, v, z, u):
-        """Full LO acceleration (contact and friction reactions included), vectorised."""
+    def flow(self):
+        """Scalar right-hand side of the whole clipped model (both walls, friction).
+
+        The fast engine's ``odeint`` integrates this: beyond a contact's exit the
+        clipped force is zero, so integrating past the exit is the true flow.
+        """
+        p, terms, gs, fric, vs, b = self.p, self._terms, self.gs, self.fric, self.vs, self.b
+        m1, m2, c1, k1 = p.m1, p.m2, p.c1, p.k1
+        tanh, sin, cos = math.tanh, math.sin, math.cos
+
+        def force(w, d, dd):
+            F = w.k * d + w.c * dd if w.kv else w.k * d ** w.n * (1.0 + w.a15 * dd)
+            return F if F > 0.0 else 0.0
+        right, left = self.walls[RIGHT], self.walls[LEFT]
+
+        def f(t, X):
+            x, v, z, u = X.tolist()
+            xe = vxe = 0.0
+            for w, br, bi in terms:
+                sn, cs = sin(w * t), cos(w * t)
+                xe += br * sn + bi * cs
+                vxe += w * (br * cs - bi * sn)
+            fc = 0.0
+            if z > b:
+                fc = force(right, z - b, u)
+            elif z < -b:
+                fc = -force(left, -z - b, -u)
+            if fric:
+                fc += fric * tanh(u / vs)
+            a = (c1 * (vxe - v) + k1 * (xe - x) + fc) / m1
+            return (v, a, u, gs - fc / m2 - a)
+        return f
+
+    def deriv(self, t: np.ndarray, Y: np.ndarray) -> np.ndarray:
+        """Vectorised :meth:`flow`: derivatives (N, 4) of states ``Y`` (N, 4) at ``t`` (N,)."""
+        x, v, z, u = Y.T
+        fc = self._reactions(z, u)
+        a = (self._spring(t, x, v) + fc) / self.p.m1
+        return np.column_stack([v, a, u, self.gs - fc / self.p.m2 - a])
+
+    def _spring(self, t, x, v):
+        """Spring and damper force on the LO (N), vectorised."""
         p = self.p
         xe = np.zeros_like(t)
         vxe = np.zeros_like(t)
@@ -243,12 +284,20 @@ class _CModel:
             sn, cs = np.sin(w * t), np.cos(w * t)
             xe += br * sn + bi * cs
             vxe += w * (br * cs - bi * sn)
-        f = p.c1 * (vxe - v) + p.k1 * (xe - x)
+        return p.c1 * (vxe - v) + p.k1 * (xe - x)
+
+    def _reactions(self, z, u):
+        """Contact and friction forces on the LO (N; minus those on the ball), vectorised."""
+        f = np.zeros_like(z)
         for s, wall in self.walls.items():
             f += s * wall.force(s * z - self.b, s * u)
         if self.fric:
             f += self.fric * np.tanh(u / self.vs)
-        return f / p.m1
+        return f
+
+    def accel(self, t, x, v, z, u):
+        """Full LO acceleration (contact and friction reactions included), vectorised."""
+        return (self._spring(t, x, v) + self._reactions(z, u)) / self.p.m1
 
 
 def _deflated(f, t0: float):
@@ -265,6 +314,33 @@ def _deflated(f, t0: float):
         q = v / tau
         return q, (d - q) / tau
     return g
+
+
+def _hermite(t, ta, hh, ya, yb, da, db):
+    """Cubic Hermite interpolant on ``[ta, ta + hh]`` (arrays broadcast along the last axis)."""
+    q = (t - ta) / hh
+    q2 = q * q
+    q3 = q2 * q
+    return ((2 * q3 - 3 * q2 + 1) * ya + (q3 - 2 * q2 + q) * hh * da
+            + (3 * q2 - 2 * q3) * yb + (q3 - q2) * hh * db)
+
+
+class _Grid:
+    """Dense output of an ``odeint`` segment: states and derivatives on a grid, cubic Hermite."""
+
+    def __init__(self, t: np.ndarray, Y: np.ndarray, dY: np.ndarray) -> None:
+        self.t, self.Y, self.dY = t, Y, dY
+
+    def __call__(self, tq) -> np.ndarray:
+        """States (4, N) at times ``tq`` (N,) inside the grid."""
+        tq = np.atleast_1d(np.asarray(tq, dtype=float))
+        t = self.t
+        i = np.clip(np.searchsorted(t, tq, side="right") - 1, 0, max(t.size - 2, 0))
+        if t.size == 1:
+            return np.repeat(self.Y[:1].T, tq.size, axis=1)
+        ta, hh = t[i][:, None], (t[i + 1] - t[i])[:, None]
+        return _hermite(tq[:, None], ta, hh, self.Y[i], self.Y[i + 1], self.dY[i],
+                        self.dY[i + 1]).T
 
 
 class _Event:
@@ -289,7 +365,12 @@ class _CompliantLoop(_Loop):
         # bounds of solve_ivp steps: contact duration / steps[0], flight grid * steps[1]
         self.steps = steps
         self.numeric = numeric
+        self.flow = cm.flow()
         self.friction = cm.fric > 0.0
+        # grid step of the fast engine in the friction band: 1/20 of the time scale
+        # of the viscous law there, mu g (1 + m2 / m1) / v_s
+        rate = cm.fric * (1.0 / cm.p.m2 + 1.0 / cm.p.m1) / cm.vs if self.friction else 0.0
+        self.band_step = min(0.5 * self.m.h, 0.05 / rate) if rate else 0.5 * self.m.h
         self.rtol = rtol
         w0 = math.sqrt(cm.p.k1 / cm.p.m1)
         self.atol = np.array([atol, atol * w0, atol, atol * w0])
@@ -388,7 +469,8 @@ class _CompliantLoop(_Loop):
                 return t, X, 0
             if abs(X[3]) < vb or (abs(X[3]) == vb and not self._leaving_band(t, X)):
                 t, X, k = self._ivp(t, X, 0, self._band_events(t, start_wall, vb),
-                                    max_step=self.m.h * self.steps[1])
+                                    max_step=self.m.h * self.steps[1], h=self.band_step,
+                                    span=64 * self.band_step)
                 if k in (0, 1):
                     side = RIGHT if k == 0 else LEFT
                     X[2] = side * cm.b
@@ -422,8 +504,10 @@ class _CompliantLoop(_Loop):
         for side in (RIGHT, LEFT):
             if side == start_wall:
                 def ev(t, X, side=side):
-                    tau = t - t0
-                    return (X[2] - side * b) / tau if tau > 0.0 else -float(side)
+                    tau = np.asarray(t - t0)
+                    pos = tau > 0.0
+                    return np.where(pos, (X[2] - side * b) / np.where(pos, tau, 1.0),
+                                    -float(side))
             else:
                 def ev(t, X, side=side):
                     return X[2] - side * b
@@ -641,9 +725,17 @@ class _CompliantLoop(_Loop):
             Xe[3] = fs * vb
         return te, Xe, inside
 
-    def _ivp(self, t0, X0, active, events, max_step):
+    def _ivp(self, t0, X0, active, events, max_step, h: float, n: int = 32,
+             span: float = 0.0):
+        """Integrate from ``t0`` up to the first event (index k) or the end (k = -1).
+
+        The reference integrates with ``solve_ivp`` (``max_step``); the fast engine with
+        :meth:`_ode` (grid step ``h`` over ``span``, first window ``n`` steps).
+        """
         if t0 >= self.t_end:
             return t0, np.asarray(X0, dtype=float).copy(), -1
+        if not self.numeric:
+            return self._ode(t0, X0, events, h, n, span)
         sol = solve_ivp(self.cm.rhs(active), (t0, self.t_end), X0, method="DOP853",
                         rtol=self.rtol, atol=self.atol, events=events, max_step=max_step,
                         first_step=min(max_step / 4, self.t_end - t0), dense_output=True)
@@ -656,6 +748,73 @@ class _CompliantLoop(_Loop):
             te, Xe = float(sol.t_events[k][0]), sol.y_events[k][0].copy()
         self._seg(NUM, t0, te, len(self.numsegs) - 1)
         return te, Xe, k
+
+    def _ode(self, t0, X0, events, h, n, span):
+        """LSODA (``odeint``) of the clipped flow on windows of a grid, up to an event.
+
+        Events are located on the grid (a sign change in their direction), refined on
+        the cubic Hermite interpolant of the grid's states and derivatives, and the
+        state there is integrated from the last grid point. Windows without an event
+        are kept; the first has ``n`` steps of ``h``, each next one twice as many (at
+        most 512), and beyond ``t0 + span`` steps twice as long (at most half the
+        flight grid's). The grids are the dense output.
+        """
+        cm, t_end = self.cm, self.t_end
+        hmax = max(h, 0.5 * self.m.h)
+        t, X = t0, np.asarray(X0, dtype=float)
+        ts, Ys, dYs = [np.array([t0])], [X[None]], [cm.deriv(np.array([t0]), X[None])]
+        te, Xe, k = t_end, None, -1
+        while t < t_end:
+            grid = t + h * np.arange(n + 1)
+            if grid[-1] >= t_end:
+                grid = np.append(grid[grid < t_end], t_end)
+            Y = self._odeint(X, grid)
+            dY = cm.deriv(grid, Y)
+            g = [(ev.fun(grid, Y.T), ev.direction) for ev in events]
+            first = None
+            for j, (gj, d) in enumerate(g):
+                ga, gb = gj[:-1], gj[1:]
+                cross = ((ga < 0) & (gb >= 0) if d > 0 else (ga > 0) & (gb <= 0)
+                         if d < 0 else (ga * gb <= 0) & (ga != 0))
+                hit = np.flatnonzero(cross)
+                if hit.size and (first is None or hit[0] <= first[0]):
+                    i = int(hit[0])
+                    ta, hh = grid[i], grid[i + 1] - grid[i]
+
+                    def fz(tt, ev=events[j], ta=ta, hh=hh,
+                           ends=(Y[i], Y[i + 1], dY[i], dY[i + 1])):
+                        return float(ev.fun(tt, _hermite(tt, ta, hh, *ends)))
+                    tr = brentq(fz, ta, grid[i + 1], xtol=1e-15, rtol=1e-15)
+                    if first is None or i < first[0] or tr < first[1]:
+                        first = (i, tr, j)
+            if first is not None:
+                i, te, k = first
+                Xe = self._odeint(Y[i], np.array([grid[i], te]))[-1] if te > grid[i] else Y[i]
+                ts += [grid[1:i + 1], [te]]
+                Ys += [Y[1:i + 1], Xe[None]]
+                dYs += [dY[1:i + 1], cm.deriv(np.array([te]), Xe[None])]
+                break
+            ts.append(grid[1:])
+            Ys.append(Y[1:])
+            dYs.append(dY[1:])
+            t, X = float(grid[-1]), Y[-1]
+            n = min(2 * n, 512)
+            if t - t0 > span:
+                h = min(2.0 * h, hmax)
+        if Xe is None:
+            te, Xe = t, X
+        self.numsegs.append(_Grid(np.concatenate(ts), np.concatenate(Ys),
+                                  np.concatenate(dYs)))
+        self._seg(NUM, t0, te, len(self.numsegs) - 1)
+        return te, np.array(Xe, dtype=float), k
+
+    def _odeint(self, X0, grid):
+        Y, info = odeint(self.flow, X0, grid, tfirst=True, rtol=self.rtol, atol=self.atol,
+                         full_output=True, mxstep=100000, h0=0.25 * (grid[1] - grid[0]))
+        if info["message"] != "Integration successful.":
+            raise RuntimeError(f"compliant engine: odeint failed at t = {grid[0]:.9g} s: "
+                               f"{info['message']}")
+        return Y
 
     def _ivp_contact(self, t0, X0, side, band: float | None = None):
         """Integrated contact up to the force's zero (see :meth:`_contact_phase`).
@@ -676,7 +835,9 @@ class _CompliantLoop(_Loop):
                        _Event(lambda t, X: X[3] + band, -1.0)]
         dur = wall.duration(abs(X0[3]), cm.m_eff)
         te, Xe, k = self._ivp(t0, X0, side, events,
-                              max_step=min(dur / self.steps[0], self.m.h))
+                              max_step=min(dur / self.steps[0], self.m.h),
+                              h=min(dur / 256.0, 0.5 * self.m.h),
+                              n=32 if band is not None else 384, span=2.0 * dur)
         if k < 0:
             return te, Xe, None
         if k >= 2:
@@ -702,18 +863,19 @@ class _CompliantLoop(_Loop):
 
             def ev_force(t, X):
                 d = s * X[2] - b
-                return wall.gate(d, s * X[3]) if d > 0 else -1.0
+                return np.where(d > 0, wall.gate(d, s * X[3]), -1.0)
             # steps of at most the time to get back inside (a few microseconds): the
             # ball may come out and go back beyond the wall within one flight step
             d0, dd0 = s * X0[2] - b, s * X0[3]
             reach = d0 / -dd0 if dd0 < 0 else self.m.h
             te, Xe, k = self._ivp(t0, X0, 0, [_Event(ev_in, -1.0), _Event(ev_force, 1.0)],
-                                  max_step=min(self.m.h * self.steps[1], max(reach, 1e-9)))
+                                  max_step=min(self.m.h * self.steps[1], max(reach, 1e-9)),
+                                  h=min(0.5 * self.m.h, max(reach, 1e-9) / 8.0), n=64)
             if k == 0:
                 Xe[2] = s * b
             return te, Xe, k + 1
         te, Xe, k = self._ivp(t0, X0, 0, self._wall_events(t0, start_wall),
-                              max_step=self.m.h * self.steps[1])
+                              max_step=self.m.h * self.steps[1], h=0.5 * self.m.h)
         if k < 0:
             return te, Xe, 0
         side = RIGHT if k == 0 else LEFT
