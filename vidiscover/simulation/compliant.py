@@ -326,18 +326,24 @@ def _hermite(t, ta, hh, ya, yb, da, db):
 
 
 class _Grid:
-    """Dense output of an ``odeint`` segment: states and derivatives on a grid, cubic Hermite."""
+    """Dense output of an ``odeint`` segment: states on a grid, cubic Hermite interpolation.
 
-    def __init__(self, t: np.ndarray, Y: np.ndarray, dY: np.ndarray) -> None:
-        self.t, self.Y, self.dY = t, Y, dY
+    The derivatives at the grid points come from ``deriv`` (the model's vectorised
+    flow) when the segment is first evaluated.
+    """
+
+    def __init__(self, t: np.ndarray, Y: np.ndarray, deriv) -> None:
+        self.t, self.Y, self.deriv, self.dY = t, Y, deriv, None
 
     def __call__(self, tq) -> np.ndarray:
         """States (4, N) at times ``tq`` (N,) inside the grid."""
         tq = np.atleast_1d(np.asarray(tq, dtype=float))
         t = self.t
-        i = np.clip(np.searchsorted(t, tq, side="right") - 1, 0, max(t.size - 2, 0))
         if t.size == 1:
             return np.repeat(self.Y[:1].T, tq.size, axis=1)
+        if self.dY is None:
+            self.dY = self.deriv(t, self.Y)
+        i = np.clip(np.searchsorted(t, tq, side="right") - 1, 0, t.size - 2)
         ta, hh = t[i][:, None], (t[i + 1] - t[i])[:, None]
         return _hermite(tq[:, None], ta, hh, self.Y[i], self.Y[i + 1], self.dY[i],
                         self.dY[i + 1]).T
@@ -762,14 +768,14 @@ class _CompliantLoop(_Loop):
         cm, t_end = self.cm, self.t_end
         hmax = max(h, 0.5 * self.m.h)
         t, X = t0, np.asarray(X0, dtype=float)
-        ts, Ys, dYs = [np.array([t0])], [X[None]], [cm.deriv(np.array([t0]), X[None])]
+        ts, Ys = [np.array([t0])], [X[None]]
+        flow = self.flow
         te, Xe, k = t_end, None, -1
         while t < t_end:
             grid = t + h * np.arange(n + 1)
             if grid[-1] >= t_end:
                 grid = np.append(grid[grid < t_end], t_end)
             Y = self._odeint(X, grid)
-            dY = cm.deriv(grid, Y)
             g = [(ev.fun(grid, Y.T), ev.direction) for ev in events]
             first = None
             for j, (gj, d) in enumerate(g):
@@ -781,8 +787,10 @@ class _CompliantLoop(_Loop):
                     i = int(hit[0])
                     ta, hh = grid[i], grid[i + 1] - grid[i]
 
-                    def fz(tt, ev=events[j], ta=ta, hh=hh,
-                           ends=(Y[i], Y[i + 1], dY[i], dY[i + 1])):
+                    ends = (Y[i], Y[i + 1], np.array(flow(ta, Y[i])),
+                            np.array(flow(grid[i + 1], Y[i + 1])))
+
+                    def fz(tt, ev=events[j], ta=ta, hh=hh, ends=ends):
                         return float(ev.fun(tt, _hermite(tt, ta, hh, *ends)))
                     tr = brentq(fz, ta, grid[i + 1], xtol=1e-15, rtol=1e-15)
                     if first is None or i < first[0] or tr < first[1]:
@@ -792,19 +800,16 @@ class _CompliantLoop(_Loop):
                 Xe = self._odeint(Y[i], np.array([grid[i], te]))[-1] if te > grid[i] else Y[i]
                 ts += [grid[1:i + 1], [te]]
                 Ys += [Y[1:i + 1], Xe[None]]
-                dYs += [dY[1:i + 1], cm.deriv(np.array([te]), Xe[None])]
                 break
             ts.append(grid[1:])
             Ys.append(Y[1:])
-            dYs.append(dY[1:])
             t, X = float(grid[-1]), Y[-1]
             n = min(2 * n, 512)
             if t - t0 > span:
                 h = min(2.0 * h, hmax)
         if Xe is None:
             te, Xe = t, X
-        self.numsegs.append(_Grid(np.concatenate(ts), np.concatenate(Ys),
-                                  np.concatenate(dYs)))
+        self.numsegs.append(_Grid(np.concatenate(ts), np.concatenate(Ys), cm.deriv))
         self._seg(NUM, t0, te, len(self.numsegs) - 1)
         return te, np.array(Xe, dtype=float), k
 
