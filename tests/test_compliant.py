@@ -18,7 +18,7 @@ import pytest
 from vidiscover import simulate
 from vidiscover.effects import Effects
 from vidiscover.errors import InputError
-from vidiscover.params import G_ACCEL, preset
+from vidiscover.params import G_ACCEL, SystemParams, preset
 from vidiscover.simulation import ContactModel, WallContact, simulate_reference
 from vidiscover.simulation.engine import SimOptions, _Loop, _Model
 
@@ -334,3 +334,21 @@ def test_ball_resting_on_a_tilted_wall_does_not_hang():
     np.testing.assert_allclose(ev["z"] - res.b, load / 1e7, rtol=1e-4)
     capped = simulate(PAPER, contact="kv:k=1e7,r=0.5", settle=0.0, duration=2.0, max_events=9)
     assert capped.status == 1 and "max_events" in capped.message
+
+
+def test_friction_flight_leaving_the_band_edge_and_returning_at_once_goes_on():
+    # realism corpus dev case 14 (HC walls, mu 0.287, tilt -0.7 deg): at t = 2.1618 s
+    # the relative speed leaves the band edge |z'| = 20 v_s and comes back into the band
+    # within one grid step; the closed-form flight used to return a zero-length phase
+    # there, forever (status 1 at max_events, no progress). Measured: 428 phases,
+    # 105 contacts in 2.3 s.
+    p = SystemParams(m1=1.0115495101415324, c1=3.3299275744265087, k1=11286.190178607456,
+                     m2=0.008150700596324216, b=0.0033221952268456404,
+                     amplitude=0.00018073895117004605, frequency=16.772626098155573)
+    fx = Effects.parse(["coulomb_friction=0.28699039437319984",
+                        "inclination=-0.6996214804434235"])
+    spec = ["right=hunt-crossley:k=5.639e+08,alpha=0.2384",
+            "left=hunt-crossley:k=3.071e+08,alpha=0.5625"]
+    res = simulate(p, fx, contact=spec, settle=0.0, duration=2.3)
+    assert res.status == 0 and res.n_events < 500
+    assert res.impacts.n > 100 and res.impacts.t[-1] > 2.2
