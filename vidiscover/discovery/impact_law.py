@@ -219,7 +219,7 @@ class _Design:
         def rss(a):
             return float(np.sum((sw * (r - self._hc(a * v))) ** 2))
 
-        grid = np.concatenate([[0.0], np.geomspace(1e-4, 1.0, 40) * self.alpha_max])
+        grid = np.concatenate([[0.0], np.geomspace(1e-4, 1.0, 14) * self.alpha_max])
         k = int(np.argmin([rss(a) for a in grid]))
         lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]
         if hi > lo:
