@@ -214,8 +214,9 @@ def simulate_case(case: Case) -> dict:
         ``feature:NAME`` for every registered feature.
     """
     from ..analysis import analyze
-    from ..analysis.returnmap import FEATURES, compute_features
+    from ..analysis.returnmap import compute_features
     from ..workflows import known_pulse, simulate_to_memory
+    from .features import ALL_FEATURES
 
     row = {f"param:{k}": v for k, v in case.to_dict().items()}
     try:
@@ -228,7 +229,7 @@ def simulate_case(case: Case) -> dict:
         row.update(label=None, status=f"error: {err}")
         return row
     feats = dict(out.features)
-    missing = [n for n in FEATURES if n not in feats]
+    missing = [n for n in ALL_FEATURES if n not in feats]
     if missing:
         feats.update(compute_features(feature_context(out), missing))
     row.update(label=truth.label, status="ok" if res.status == 0 else f"sim: {res.message}")
