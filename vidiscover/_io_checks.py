@@ -2,7 +2,7 @@
 
 Every check raises :class:`~vidiscover.errors.InputError` with one line naming the
 file, the problem (with its row, and its line for CSV) and the fix. The rules are the
-module constants below; DESIGN.md section 2 lists the bad inputs they cover.
+module constants below; the README's 'Recording format' lists the bad inputs they cover.
 """
 
 from __future__ import annotations

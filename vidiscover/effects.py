@@ -54,7 +54,7 @@ class EffectSpec:
     Parameters
     ----------
     name : str
-        Contract name (DESIGN.md section 1).
+        Contract name (the README's effects table).
     params : Mapping[str, Any]
         Parameter names with their defaults, in positional order.
     checks : Mapping[str, Callable]
@@ -75,7 +75,7 @@ class EffectSpec:
     units: Mapping[str, str] = field(default_factory=dict)
 
 
-#: The catalogue of DESIGN.md section 1 (names are a contract).
+#: The catalogue of the README's effects table (names are a contract).
 EFFECTS: dict[str, EffectSpec] = {}
 #: Effects outside the catalogue: simulated, but never a candidate of the gap diagnosis.
 EXTRA_EFFECTS: dict[str, EffectSpec] = {}

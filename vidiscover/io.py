@@ -3,7 +3,7 @@
 A recording file (CSV, Parquet or NPZ) holds the columns ``t, x, a, xe`` in SI units,
 or raw sensor voltages ``x_mV, a_mV, xe_mV``; its metadata live in a sidecar JSON with
 the same stem (``rec.csv`` + ``rec.json``) and a simulated recording's ground truth in
-``rec.truth.json`` (DESIGN.md section 2).
+``rec.truth.json`` (the README's 'Recording format').
 
 Reading checks everything a rig, a logger or a spreadsheet can get wrong and raises
 :class:`~vidiscover.errors.InputError` with one line naming the file, the problem and

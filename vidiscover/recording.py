@@ -2,7 +2,7 @@
 
 A :class:`Recording` holds uniformly sampled ``t``, ``x`` (LO displacement, m),
 ``a`` (LO acceleration, m/s^2) and ``xe`` (base displacement, m) in SI units, and a
-:class:`Metadata` value (DESIGN.md section 2). Reading and writing files lives in
+:class:`Metadata` value (the README's 'Recording format'). Reading and writing files lives in
 :mod:`vidiscover.io`.
 """
 
@@ -37,7 +37,7 @@ def _positive(where: str, name: str, value: Any, unit: str) -> float:
 
 @dataclass(frozen=True)
 class Metadata:
-    """Metadata of a recording (DESIGN.md section 2); only ``b`` is required.
+    """Metadata of a recording (the README's 'Recording format'); only ``b`` is required.
 
     Parameters
     ----------

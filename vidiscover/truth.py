@@ -4,7 +4,7 @@ A simulated recording carries what the sensors could not see: the true impacts
 (with their restitution coefficient and LO velocity jump), the sticking phases, the
 ball and LO motion, the effects and parameters used and, once labelled, the regime.
 :class:`GroundTruth` holds it; :meth:`GroundTruth.to_dict` is the JSON content of
-``rec.truth.json`` (DESIGN.md section 2) and :meth:`GroundTruth.from_dict` reads it
+``rec.truth.json`` (the README's 'Recording format') and :meth:`GroundTruth.from_dict` reads it
 back, including files written before the keys ``contact``, ``t_in``, ``t_out``,
 ``v_in`` and ``v_out`` existed.
 
@@ -343,8 +343,8 @@ class GroundTruth:
     message : str
         Simulator message.
     regime : dict or None
-        Ground-truth regime (``label`` and the quantities behind it, DESIGN.md
-        section 4); None until labelled (:meth:`with_regime`).
+        Ground-truth regime (``label`` and the quantities behind it, the
+        README's 'Regime labels'); None until labelled (:meth:`with_regime`).
     contact : dict or None
         The compliant-contact model (``{"right": {...}, "left": {...}}``); None for
         the exact engine (instantaneous impacts).

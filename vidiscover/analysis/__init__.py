@@ -1,4 +1,4 @@
-"""Analysis of a recording (DESIGN.md section 3, stages 1-4), one idea per module.
+"""Analysis of a recording (the README, stages 1-4), one idea per module.
 
 * :mod:`.signals` -- input checks, bad samples, robust noise, forcing fit;
 * :mod:`.impacts` -- stage 1, impacts as pulses in the LO acceleration;

@@ -87,7 +87,7 @@ class AnalysisResult:
         return self._recording
 
     def summary(self) -> dict:
-        """JSON-ready nested dict (DESIGN.md section 6 ``analyze`` keys and more).
+        """JSON-ready nested dict (the README's command table ``analyze`` keys and more).
 
         Keys: ``impacts`` {``n``, ``t``, ``side``, ``dv``, ``right``, ``left``,
         ``noise``}, ``restitution`` {``mu``, ``right``/``left`` {``n``, ``rms``,

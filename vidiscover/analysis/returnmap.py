@@ -350,7 +350,7 @@ def _cycle_amplitudes(ctx: FeatureContext) -> np.ndarray:
 
 @register_feature("envelope_modulation")
 def _modulation(ctx: FeatureContext) -> float:
-    """(P95 - P5) / (P95 + P5) of the per-cycle LO half peak-to-peak (DESIGN M)."""
+    """(P95 - P5) / (P95 + P5) of the per-cycle LO half peak-to-peak (label index M)."""
     amp = _cycle_amplitudes(ctx)
     if amp.size == 0:
         return _NAN

@@ -1,6 +1,6 @@
 """``vidiscover analyze REC... --out DIR``: impacts, ball motion, restitution, report.
 
-For every recording it writes ``summary.json`` (DESIGN.md section 6 keys
+For every recording it writes ``summary.json`` (the README's command table keys
 ``impacts.n``, ``impacts.t``, ``impacts.side``, ``restitution.{side}.rms``,
 ``restitution.{side}.n``, ``regime.label``, plus the friction table ``mu_table``
 and, for simulated recordings, ``truth``), ``impacts.csv``, ``flights.csv``,

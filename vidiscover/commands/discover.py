@@ -4,7 +4,7 @@ All recordings are read and checked first, then analysed and pooled
 (:func:`vidiscover.discovery.discover`); the output directory is written
 atomically (bad input leaves nothing behind):
 
-* ``discovery.json`` -- the summary (DESIGN.md section 6 keys ``flight.mu``,
+* ``discovery.json`` -- the summary (the README's command table keys ``flight.mu``,
   ``flight.theta_deg``, ``flight.terms``, ``impact_law.right.formula``,
   ``impact_law.left.formula``; ``flight.identified`` and ``flight.reason``, with
   ``flight.mu``/``theta_deg`` null when the law is not identified and the raw fit

@@ -1,6 +1,6 @@
 """``vidiscover gap REC --out DIR`` and ``vidiscover gap-check``: sim-to-real gap.
 
-``gap`` diagnoses one recording against the nominal model (DESIGN.md section 5) and
+``gap`` diagnoses one recording against the nominal model (the README's gap section) and
 writes ``summary.json`` (keys ``gap_before``, ``effects[] {name, params, gap_after,
 shrink}``, ``attributed[]``, ``unexplained``, plus components per group and per
 statistic), ``figures/waterfall.png``, ``figures/returnmap.png``,

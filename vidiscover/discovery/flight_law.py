@@ -122,7 +122,7 @@ _STARTS = ((0.0, 0.0), (0.3, 2.0), (0.3, -2.0))
 _AMBIGUOUS = (0.02, 0.2)    # fixed points further apart than this (mu, deg) are rivals
 _COLLINEAR = 0.99           # cosine above which mu and theta are confounded
 _TOL_MU, _TOL_THETA = 5e-4, 5e-3   # fixed point reached (mu, deg)
-#: Largest admissible |theta| (deg) unless the caller widens it (DESIGN.md section 9).
+#: Largest admissible |theta| (deg) unless the caller widens it.
 MAX_TILT_DEG = 10.0
 
 

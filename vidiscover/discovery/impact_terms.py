@@ -131,7 +131,7 @@ def hunt_crossley_restitution(x) -> np.ndarray:
     """Exact restitution of a Hunt-Crossley contact, as a function of ``x = alpha v``.
 
     The wall force ``k delta^n (1 + 1.5 alpha delta')`` (Hunt and Crossley 1975,
-    J. Appl. Mech. 42:440; the parameterisation of DESIGN.md section 9) gives, on
+    J. Appl. Mech. 42:440; the parameterisation of the README's 'Realistic recordings') gives, on
     integrating ``m u du/d delta = -k delta^n (1 + chi u)`` (``chi = 1.5 alpha``)
     over the compression and the restitution phase, the implicit relation
 

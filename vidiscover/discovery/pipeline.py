@@ -123,7 +123,7 @@ class DiscoveryResult:
         return lines
 
     def summary(self) -> dict:
-        """JSON-ready dict (DESIGN.md section 6 ``discover`` keys and more).
+        """JSON-ready dict (the README's command table ``discover`` keys and more).
 
         Keys: ``flight`` (``identified``, ``reason``, ``mu``, ``theta_deg``,
         ``terms``, ``equation``, intervals, ``diagnostic_fit``; ``mu``/``theta_deg``

@@ -1,4 +1,4 @@
-"""Sim-to-real gap diagnosis (DESIGN.md section 5).
+"""Sim-to-real gap diagnosis (the README's gap section).
 
 * :mod:`.components` -- where: localised, normalised gap statistics;
 * :mod:`.fit` -- which: every catalogue effect added, fitted, validated;

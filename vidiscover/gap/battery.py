@@ -15,7 +15,7 @@ identifiability limits of the physics shape the list and the verdicts:
   the impact speeds on a wall vary, so its cases use laws that differ per wall
   (which break the symmetric orbits into multi-impact or chaotic ones);
 * ``clearance_error`` (b + db instead of b) is observable here through the flight
-  times, the momentum balance at the walls and the LO response -- the DESIGN
+  times, the momentum balance at the walls and the LO response -- the contract
   note that it is unobservable alone concerns a *shift* of both walls (an offset of
   the clearance), which no statistic here can see without friction or tilt; the
   battery simulates width errors only;

@@ -50,7 +50,7 @@ _stat("flights.speed_ratio", "flights", 0.01,
       "log ratio of mean flight speeds towards the right and towards the left")
 _stat("lo.amplitude", "lo", 0.01, "log LO amplitude at f relative to the base amplitude")
 _stat("lo.phase", "lo", 0.01, "LO phase at f relative to the base (rad)")
-_stat("lo.envelope", "lo", 0.02, "envelope modulation of the LO (DESIGN M)")
+_stat("lo.envelope", "lo", 0.02, "envelope modulation of the LO (label index M)")
 _stat("excitation.h2", "excitation", 0.002, "base 2nd harmonic (relative, cos part)")
 _stat("excitation.h2s", "excitation", 0.002, "base 2nd harmonic (relative, sin part)")
 _stat("excitation.h3", "excitation", 0.002, "base 3rd harmonic (relative, cos part)")

@@ -1,4 +1,4 @@
-"""Sim-to-real gap diagnosis of one recording (DESIGN.md section 5).
+"""Sim-to-real gap diagnosis of one recording (the README's gap section).
 
 :func:`diagnose` builds the nominal model of a recording (metadata parameters, the
 fitted base sine as excitation, one constant r = the analysis' pooled r, no
@@ -142,7 +142,7 @@ class GapReport:
     def to_dict(self) -> dict:
         """JSON-ready dict.
 
-        DESIGN keys ``gap_before``, ``effects``, ``attributed``, ``unexplained``,
+        contract keys ``gap_before``, ``effects``, ``attributed``, ``unexplained``,
         plus components, per-statistic gaps, verdict and the nominal model.
         """
         before = self.nominal.gap

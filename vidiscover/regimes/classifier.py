@@ -4,7 +4,7 @@
   (balanced class weights, NaN-aware) whose class probabilities are calibrated by
   :class:`~sklearn.calibration.CalibratedClassifierCV`; it also remembers the range
   of every training feature (the training domain).
-* :class:`RuleBaseline` -- the DESIGN.md section 4 rules applied to the detected
+* :class:`RuleBaseline` -- the the README's 'Regime labels' rules applied to the detected
   features, a transparent baseline to compare with.
 * :class:`RegimeModel` -- a fitted classifier with its feature names, the parameter
   ranges of its training sweep and its training metadata; :meth:`RegimeModel.classify`
@@ -219,7 +219,7 @@ class RegimeClassifier(ClassifierMixin, BaseEstimator):
 # --------------------------------------------------------------------------- baseline
 @dataclass(frozen=True)
 class RuleBaseline:
-    """The label rules of DESIGN.md section 4 applied to the *detected* features.
+    """The label rules of the README's 'Regime labels' applied to the *detected* features.
 
     ``impacts_per_cycle`` < 0.05 -> ``no_impact``; ``impacting_cycle_share`` < 0.9 and
     ``envelope_modulation`` >= 0.15 -> ``smr``; otherwise, when the share is >= 0.9

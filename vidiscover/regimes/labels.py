@@ -1,4 +1,4 @@
-"""Ground-truth regime labels from a simulated state (DESIGN.md section 4, a contract).
+"""Ground-truth regime labels from a simulated state (the README's 'Regime labels', a contract).
 
 With T = 1/f and cycles cut at base phase 0 (simulation times k T), n_k impacts in
 cycle k, ipc = mean n_k, phi = share of cycles with n_k >= 1, A_k = half the
@@ -28,7 +28,7 @@ import numpy as np
 
 __all__ = ["LABELS", "RegimeTruth", "label_simulation", "label_from_events"]
 
-#: Regime labels, a contract (DESIGN.md section 4), from simple to complex.
+#: Regime labels, a contract (the README's 'Regime labels'), from simple to complex.
 LABELS: tuple[str, ...] = ("no_impact", "1ipc", "2ipc_sym", "2ipc_asym", "multi_ipc",
                            "smr", "chaotic")
 

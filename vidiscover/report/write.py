@@ -58,7 +58,7 @@ def analysis_summary(result, truth: GroundTruth | None = None, *, mu_table: bool
     Returns
     -------
     dict
-        :meth:`AnalysisResult.summary` (DESIGN.md section 6 keys ``impacts.n``,
+        :meth:`AnalysisResult.summary` (the README's command table keys ``impacts.n``,
         ``impacts.t``, ``impacts.side``, ``restitution.{side}.rms``/``n``,
         ``regime.label`` ...) plus ``mu_table`` and ``truth`` when asked; JSON-ready
         (NaN as None).

@@ -1,4 +1,4 @@
-"""Compliant-contact simulation: walls as clipped penalty forces (DESIGN.md section 9).
+"""Compliant-contact simulation: walls as clipped penalty forces.
 
 Model (state x, x', z = y - x, z'; ``delta = s z - b`` the penetration beyond the
 wall ``s`` = +1 right / -1 left, ``F >= 0`` the clipped law of that wall,

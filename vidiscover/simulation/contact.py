@@ -3,7 +3,7 @@
 Each wall pushes the ball back with a force that depends on the penetration
 ``delta >= 0`` (how far the ball is beyond the wall, ``|z| - b``) and its rate
 ``delta'``, clipped to be compressive (``F >= 0``); the reaction acts on the LO
-(DESIGN.md section 9).
+(the README's 'Realistic recordings').
 
 ``kelvin-voigt`` (``k`` N/m, ``r``)
     ``F = k delta + c delta'``; the damping ``c`` is matched to the restitution

@@ -96,7 +96,7 @@ class ImpactTable:
         """JSON-ready list of dicts with sides as strings and times shifted by ``-t_offset``.
 
         Besides the fields, ``t_in`` (= ``t``), ``t_out``, ``v_in`` (= ``u_minus``) and
-        ``v_out`` (= ``u_plus``) describe the contact episode (DESIGN.md section 9).
+        ``v_out`` (= ``u_plus``) describe the contact episode (the README's 'Realistic recordings').
         """
         out = []
         for i in range(self.n):
