@@ -67,3 +67,11 @@ def test_analyze_rejects_an_empty_file_before_the_heavy_imports(tmp_path):
     assert status.startswith("2 ") and "empty file" in status
     assert imported == "[]"
     assert not (tmp_path / "o").exists()
+
+
+def test_discover_on_a_directory_or_nothing_is_one_line(tmp_path):
+    for args in (["discover", str(tmp_path), "--out", str(tmp_path / "o")],
+                 ["discover", "--out", str(tmp_path / "o")]):
+        res = CliRunner().invoke(main, args)
+        assert res.exit_code == 2 and res.stderr.count("\n") == 1, res.output
+    assert not (tmp_path / "o").exists()

@@ -164,8 +164,7 @@ def human_lines(doc: dict) -> list[str]:
 
 
 @click.command("discover")
-@click.argument("recordings", nargs=-1, required=True,
-                type=click.Path(dir_okay=False, path_type=Path))
+@click.argument("recordings", nargs=-1, type=click.Path(path_type=Path))
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), required=True,
               help="Output directory.")
 @click.option("--mu", type=float, default=0.0, show_default=True,
