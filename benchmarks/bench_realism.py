@@ -11,7 +11,9 @@ flight law so that detection and restitution are scored on their own):
 
 * *count*: detected impacts against the detectable true contact episodes (peak SNR
   >= 8 with the peak of the case's true anti-alias response, no stronger episode
-  within two samples; :func:`vidiscover.analysis.detectable`), within 3 %;
+  within two samples; :func:`vidiscover.analysis.detectable`), within 3 %; detections
+  matched to true episodes below that criterion are real impacts, not counted as
+  errors (they are left out of the detected count);
 * *precision / recall*: same wall, within 0.5 ms of the true contact entry;
 * *timing*: median |t_est - t_in| of matched impacts (target <= 50 us);
 * *r*: per wall with >= 10 clean impacts, |RMS(r_est) - RMS(r_true)| (target 0.03);
@@ -79,6 +81,10 @@ def score_case(case) -> dict:
     ie, it = np.concatenate(ie), np.concatenate(it)
     n_ok = int(ok.sum())
     tp = int(ok[it].sum())
+    # true episodes below the detectability criterion that were found anyway are real
+    # impacts, not count errors: the count is compared with the detectable episodes
+    # plus those
+    n_extra = int((~ok[it]).sum())
     precision = len(ie) / det.n if det.n else float("nan")
     recall = tp / n_ok if n_ok else float("nan")
     timing = float(np.median(np.abs(det.t[ie] - imp.t_in[it]))) if len(ie) else float("nan")
@@ -93,7 +99,8 @@ def score_case(case) -> dict:
     return {"name": case.name, "contact": "+".join(sorted(kinds)),
             "filter": case.sensors.get("anti_alias", "linear-phase"), "regime": regime,
             "fs": fs, "n_true": n_ok, "n_est": det.n,
-            "count_ok": bool(n_ok and abs(det.n - n_ok) <= 0.03 * n_ok),
+            "n_found_below": n_extra,
+            "count_ok": bool(n_ok and abs(det.n - n_extra - n_ok) <= 0.03 * n_ok),
             "precision": precision, "recall": recall, "timing_us": timing * 1e6,
             "r_err": walls, "periodic": bool((truth.regime or {}).get("periodic")),
             "seconds_sim": t_sim, "seconds_analyze": t_an,

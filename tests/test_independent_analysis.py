@@ -37,13 +37,14 @@ from vidiscover.recording import Recording
 #: Measured median |t_est - t_in| (us) per case at the time of writing; the guard allows
 #: 1.3x plus 5 us.
 MEASURED_TIMING_US = {
-    "P01_b8_chatter": 38.6, "P02_b11_huntcrossley": 30.3, "P03_b13_friction": 13.4,
-    "P04_pool_b5": 67.5, "P05_pool_b8": 12.9, "P06_pool_b11": 10.5, "P07_otherrig": 30.4,
-    "P08_gap_none": 8.7, "P09_gap_tilt": 9.3, "P10_gap_asym": 7.4}
-#: Cases whose median timing error misses the 50 us specification (the learned delay
-#: trades contact duration against filter order on a Kelvin-Voigt contact that is not a
-#: half-sine; see the report).
-TIMING_MISSES = {"P04_pool_b5"}
+    "P01_b8_chatter": 26.5, "P02_b11_huntcrossley": 90.6, "P03_b13_friction": 13.4,
+    "P04_pool_b5": 9.9, "P05_pool_b8": 6.3, "P06_pool_b11": 30.4, "P07_otherrig": 30.4,
+    "P08_gap_none": 4.4, "P09_gap_tilt": 6.2, "P10_gap_asym": 16.1}
+#: Cases whose median timing error misses the 50 us specification: the learned delay
+#: trades contact duration against filter order (P02: a 2nd-order Bessel with a 14 us
+#: contact fits the Hunt-Crossley pulses 2.6x better than any model with the true 228 us
+#: contact, and its delay is 90 us short; the pulse is under one sample wide at 6400 Hz).
+TIMING_MISSES = {"P02_b11_huntcrossley"}
 
 
 @functools.cache
@@ -102,7 +103,7 @@ def test_no_ringing_lobe_is_counted(name):
 
 
 @pytest.mark.parametrize("name", [
-    pytest.param(c, marks=pytest.mark.xfail(strict=True, reason="learned delay off by 68 us"))
+    pytest.param(c, marks=pytest.mark.xfail(strict=True, reason="learned delay off by 90 us"))
     if c in TIMING_MISSES else c for c in CASES])
 def test_timing_error_against_contact_entry_spec(name):
     out, key, tr, ok, ie, it = _scores(name)

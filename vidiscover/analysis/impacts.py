@@ -11,7 +11,10 @@ given. The filter's ringing is part of that shape, so it is fitted, not counted.
 
 0. *Pulse response.* Learned (or given); impact times are reported at the contact
    entry: the fitted pulse time less the learned delay. Pulses whose contact would
-   begin before the first sample (a causal filter's start-up) are ignored.
+   begin before the second sample (a causal filter's start-up step, which has no
+   sample before its peak to tell it from a pulse) are ignored. Each wall has its
+   own contact duration (walls of different stiffness): a pulse is fitted with
+   both walls' models and keeps the one of its sign's wall.
 1. *Smooth part.* A cubic Savitzky-Golay smoother (a few ms) of the acceleration
    with the pulses found so far subtracted; bad samples (NaN dropouts, clipped
    readings) and the main lobes (+/- 2 samples) of the fitted pulses are bridged by
@@ -42,7 +45,7 @@ Limit: same-wall pulses of similar strength 2-3 samples apart may be fitted as o
 (see ``tests/test_analysis_properties.py``); in the simulated rig the re-impacts of
 a chatter sequence shrink by r ~ 0.2, far below that.
 
-Side = sign of the pulse (positive: right wall, DESIGN.md section 6); the
+Side = sign of the pulse (positive: right wall, the README's command table); the
 alternation condition of the paper (eq. 5) is checked, not imposed: two consecutive
 impacts on the same wall (chatter) are kept when the LO acceleration between them
 can send the ball back to that wall (mean x'' > -mu g for the left wall, < mu g for
@@ -293,15 +296,16 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
                             "the default linear-phase model was used")
     if response is not None:
         pulse = response.model
-        fit_width = False                 # the learned model has its contact duration
-    pulse = pulse or PulseModel()
-    hw = pulse.span(fs)
+        models = (response.model_for(1), response.model_for(-1))
+        fit_width = False                 # the learned model has its contact durations
+    else:
+        pulse = pulse or PulseModel()
+        models = (pulse, pulse)
     win = max(7, int(round(baseline_ms * 1e-3 * fs)) | 1)
     if win > n:
         win = n if n % 2 else n - 1
-    grid, basis, Qm, mf = _templates(pulse, fs, int(fit_halfwidth))
-    knorm = pulse.norm(fs)
-    fit = _Fitter(af, bad, pulse, fs, int(fit_halfwidth), grid, basis, Qm)
+    fit = _Fitter(af, bad, models, fs, int(fit_halfwidth))
+    hw = fit.hw
 
     def smooth_part():
         sm = af - fit.render()
@@ -327,7 +331,7 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
     resid[bad] = 0.0
     if not sigma > 0:
         sigma = max(float(np.std(resid)), 1e-12)
-    z = _matched(resid, mf) / sigma
+    z = fit.matched(resid) / sigma
     first = _candidates(z, threshold, rel=_FIRST_ROUND_REL, span=hw)
     if clip.any():
         # a run of clipped samples is a pulse too strong to read: seed a candidate at
@@ -345,14 +349,12 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         base = savgol_smooth(smoother_input(), win)
         fit.backfit(base, iterations=1)
         if fit_width:
-            wider = _wider_pulse(fit, base, sigma, knorm)
+            wider = _wider_pulse(fit, base, sigma)
             if wider is not None:
                 pulse = wider
-                hw = pulse.span(fs)
-                grid, basis, Qm, mf = _templates(pulse, fs, int(fit_halfwidth))
-                knorm = pulse.norm(fs)
                 old = fit
-                fit = _Fitter(af, bad, pulse, fs, int(fit_halfwidth), grid, basis, Qm)
+                fit = _Fitter(af, bad, (pulse, pulse), fs, int(fit_halfwidth))
+                hw = fit.hw
                 fit.pos, fit.amp = old.pos, old.amp
                 fit.backfit(base, iterations=1)
                 base = savgol_smooth(smoother_input(), win)
@@ -365,17 +367,17 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         if rnd == 0:
             good = resid[~bad]
             sigma = robust_std(good[:: max(1, good.size // 8192)]) or sigma
-        z = _matched(resid, mf) / sigma
+        z = fit.matched(resid) / sigma
         near = None
         if fit.n:
-            near = (fit.pos, mismatch * np.abs(fit.amp) * knorm / sigma)
+            near = (fit.pos, mismatch * fit.snr(sigma))
         idx = _candidates(z, threshold, near=near, span=hw)
         if idx.size == 0:
             break
         fit.add(idx)
         fit.backfit(base, iterations=1)
-        fit.prune(0.8 * threshold, sigma, knorm)
-        if _largest_near(fit.pos, fit.amp, idx) * knorm / sigma > _REBASE_SNR:
+        fit.prune(0.8 * threshold, sigma)
+        if _largest_near(fit.pos, fit.amp, idx) * max(fit.knorm) / sigma > _REBASE_SNR:
             # a strong pulse missed by the first round was smeared into the smooth
             # part: recompute it, else its lobes come back as false pulses
             base = savgol_smooth(smoother_input(), win)
@@ -387,15 +389,15 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
     good = resid[~bad]
     sigma = robust_std(good[:: max(1, good.size // 8192)]) or sigma
     n_start = n_prev = fit.n
-    fit.prune(threshold, sigma, knorm)
-    fit.prune_lobes(threshold, sigma, knorm, mismatch)
+    fit.prune(threshold, sigma)
+    fit.prune_lobes(threshold, sigma, mismatch)
     for _ in range(3):                  # neighbours of a dropped pulse refit, then re-prune
         if fit.n == n_prev:
             break
         n_prev = fit.n
         fit.backfit(base, iterations=1)
-        fit.prune(threshold, sigma, knorm)
-        fit.prune_lobes(threshold, sigma, knorm, mismatch)
+        fit.prune(threshold, sigma)
+        fit.prune_lobes(threshold, sigma, mismatch)
     if fit.n != n_start:
         smooth = smooth_part()
     a_smooth = smooth
@@ -404,11 +406,14 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         resid = a_smooth - base
 
     b = float(rec.meta.b if b is None else b)
-    delay = response.delay if response is not None else pulse.delay(fs)
-    n_early = fit.drop_before(delay * fs - 0.5)
+    if response is not None:
+        delays = (response.delay, response.delay_left)
+    else:
+        delays = (pulse.delay(fs), pulse.delay(fs))
+    n_early = fit.drop_before(np.array(delays) * fs + 1.0)
     if n_early:
         warnings.append(f"{n_early} pulse(s) at the record start ignored: their contact would "
-                        "begin before the first sample (the anti-alias filter's start-up)")
+                        "begin before the second sample (the anti-alias filter's start-up)")
     n_fast = fit.drop_fast_crossings(2.0 * b / max_ball_speed * fs) if max_ball_speed > 0 else 0
     if n_fast:
         warnings.append(f"{n_fast} weak pulse(s) dropped: the ball cannot cross the clearance "
@@ -421,7 +426,7 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         if bad.any():
             a_smooth[bad] = base[bad]
     model_error = max(mismatch, 2.0 * response.misfit) if response is not None else mismatch
-    table = fit.table(float(rec.t[0]) - delay, resid, sigma, knorm, clip, nan, model_error)
+    table = fit.table(float(rec.t[0]), delays, resid, sigma, clip, nan, model_error)
     if table["t"].size:
         check = _alternation_check(table, base, mu, sigma)
         table["side_check"] = check
@@ -454,13 +459,13 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
 _TAU_GRID = (0.5, 1.0, 1.5, 2.0, 3.0, 4.0, 6.0, 8.0)   # contact durations tried (samples)
 
 
-def _wider_pulse(fit: _Fitter, base: np.ndarray, sigma: float, knorm: float):
+def _wider_pulse(fit: _Fitter, base: np.ndarray, sigma: float):
     """A pulse model with a contact duration if it fits the strong pulses better.
 
     Returns None when the current model fits them to the noise level (chi-square
     per degree of freedom <= 1.5) or no wider pulse reduces the misfit by 10 %.
     """
-    snr = np.abs(fit.amp) * knorm / sigma
+    snr = fit.snr(sigma)
     strong = np.argsort(-snr)[: min(40, int((snr > 30).sum()))]
     if strong.size < 3:
         return None
@@ -477,10 +482,10 @@ def _wider_pulse(fit: _Fitter, base: np.ndarray, sigma: float, knorm: float):
         energy = np.einsum("ngk,ngk->ng", proj, proj).max(axis=1)
         return float(np.sum(np.einsum("nw,nw->n", Y, Y) - energy)) / (sigma ** 2 * dof)
 
-    chi0 = misfit(fit.pulse)
+    m0 = fit.models[0]
+    chi0 = misfit(m0)
     if chi0 <= 1.5:
         return None
-    m0 = fit.pulse
 
     def model(k: float) -> PulseModel:
         return replace(m0, tau=m0.tau + k / fit.fs)
@@ -596,15 +601,19 @@ def _window_max(v: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
 class _Fitter:
     """Pulse positions (fractional samples) and amplitudes (m/s), with back-fitting."""
 
-    def __init__(self, af, bad, pulse, fs, L, grid, basis, Qm):
+    def __init__(self, af, bad, models, fs, L):
         self.n_samples = af.size
-        self.hw = pulse.span(fs)
+        self.models = tuple(models)                     # (right wall, left wall)
+        self.two = self.models[0] != self.models[1]
+        self.hw = max(m.span(fs) for m in self.models)
         self.pad = self.hw + L + 4
         p = self.pad
         self.data = np.concatenate([np.zeros(p), af, np.zeros(p)])
         self.weight = np.concatenate([np.zeros(p), (~bad).astype(float), np.zeros(p)])
-        self.pulse, self.fs, self.L = pulse, fs, L
-        self.grid, self.basis, self.Qm = grid, basis, Qm
+        self.fs, self.L = fs, L
+        self.tpl = [_templates(m, fs, L) for m in self.models]
+        self.knorm = tuple(m.norm(fs) for m in self.models)
+        self.peaks = tuple(m.peak(fs) for m in self.models)
         self.pos = np.zeros(0)
         self.amp = np.zeros(0)
         self._render_cache = None
@@ -614,6 +623,32 @@ class _Fitter:
     @property
     def n(self) -> int:
         return int(self.pos.size)
+
+    def side_value(self, values) -> np.ndarray:
+        """Per pulse, ``values[0]`` (right wall, amp >= 0) or ``values[1]`` (left)."""
+        return np.where(self.amp >= 0, values[0], values[1])
+
+    def snr(self, sigma: float) -> np.ndarray:
+        """Matched-filter SNR of each fitted pulse."""
+        return np.abs(self.amp) * self.side_value(self.knorm) / max(sigma, 1e-300)
+
+    def kernel_rows(self, j: np.ndarray, delta: np.ndarray, sign: np.ndarray) -> np.ndarray:
+        """Kernel of each pulse's wall at ``j - delta``, an (n, W) array."""
+        out = None
+        for model in (self.models if self.two else self.models[:1]):
+            lim = model.span(self.fs) + 8
+            K = model.rows(np.clip(j, -lim, lim), delta, self.fs)
+            K = np.where(np.abs(j) <= lim, K, 0.0)
+            out = K if out is None else np.where((sign >= 0)[:, None], out, K)
+        return out
+
+    def matched(self, resid: np.ndarray) -> np.ndarray:
+        """Matched-filter statistic, the larger over the walls' models."""
+        z = _matched(resid, self.tpl[0][3])
+        if self.two:
+            z1 = _matched(resid, self.tpl[1][3])
+            z = np.where(np.abs(z1) > np.abs(z), z1, z)
+        return z
 
     def _split(self):
         c = np.rint(self.pos).astype(np.int64)
@@ -631,7 +666,7 @@ class _Fitter:
                 out = np.zeros(size)
             else:
                 c, d = self._split()
-                vals = self.amp[:, None] * self.pulse.rows(self.jw, d, self.fs)
+                vals = self.amp[:, None] * self.kernel_rows(self.jw, d, self.amp)
                 idx = c[:, None] + self.jw[None, :] + self.pad
                 out = np.bincount(idx.ravel(), weights=vals.ravel(), minlength=size)
                 vals.flags.writeable = False
@@ -672,8 +707,7 @@ class _Fitter:
             idx = c[:, None] + self.jl[None, :] + p
             Y = target[idx] - model[idx] + own
             W = self.weight[idx]
-            delta, amp = _fit_windows(Y, W, self.grid, self.basis, self.Qm, self.pulse,
-                                      self.fs, self.jl)
+            delta, amp = self.fit_windows(Y, W)
             pos = c + delta
             ok = np.isfinite(pos) & np.isfinite(amp)
             self.pos = np.where(ok, pos, self.pos)
@@ -683,10 +717,25 @@ class _Fitter:
         inside = (self.pos > -0.5) & (self.pos < self.n_samples - 0.5)
         self.pos, self.amp = self.pos[inside], self.amp[inside]
 
-    def prune(self, threshold: float, sigma: float, knorm: float) -> None:
+    def fit_windows(self, Y, W):
+        """Sub-sample delay and area per window, under the model of the pulse's wall.
+
+        Each window is fitted with both walls' models; a positive area takes the right
+        wall's fit, a negative one the left's (the better fit when the two disagree).
+        """
+        grid, basis, Qm, _ = self.tpl[0]
+        delta, amp, e = _fit_windows(Y, W, grid, basis, Qm, self.models[0], self.fs, self.jl)
+        if not self.two:
+            return delta, amp
+        grid, basis, Qm, _ = self.tpl[1]
+        d1, a1, e1 = _fit_windows(Y, W, grid, basis, Qm, self.models[1], self.fs, self.jl)
+        left = np.where(np.sign(amp) == np.sign(a1), a1 < 0, e1 > e)
+        return np.where(left, d1, delta), np.where(left, a1, amp)
+
+    def prune(self, threshold: float, sigma: float) -> None:
         if self.n == 0:
             return
-        keep = np.abs(self.amp) * knorm / max(sigma, 1e-300) > threshold
+        keep = self.snr(sigma) > threshold
         pos, amp = self.pos[keep], self.amp[keep]
         if pos.size > 1:
             # two fits converged on one pulse, or split one pulse into a same-wall pair
@@ -699,8 +748,7 @@ class _Fitter:
             pos, amp = pos[~drop], amp[~drop]
         self.pos, self.amp = pos, amp
 
-    def prune_lobes(self, threshold: float, sigma: float, knorm: float,
-                    mismatch: float) -> None:
+    def prune_lobes(self, threshold: float, sigma: float, mismatch: float) -> None:
         """Drop pulses in the misfit lobes of stronger ones.
 
         A pulse is kept if its SNR exceeds ``threshold`` plus ``mismatch`` times the
@@ -709,7 +757,7 @@ class _Fitter:
         """
         if self.n < 2 or mismatch <= 0:
             return
-        snr = np.abs(self.amp) * knorm / max(sigma, 1e-300)
+        snr = self.snr(sigma)
         i = np.arange(self.n)
         lo = np.searchsorted(self.pos, self.pos - self.hw, side="left")
         hi = np.searchsorted(self.pos, self.pos + self.hw, side="right")
@@ -717,9 +765,9 @@ class _Fitter:
         keep = snr > threshold + mismatch * others
         self.pos, self.amp = self.pos[keep], self.amp[keep]
 
-    def drop_before(self, first: float) -> int:
-        """Drop the pulses referenced before sample ``first``; return how many."""
-        keep = self.pos >= first
+    def drop_before(self, first: np.ndarray) -> int:
+        """Drop the pulses referenced before sample ``first`` (right, left); return how many."""
+        keep = self.pos >= self.side_value(first)
         self.pos, self.amp = self.pos[keep], self.amp[keep]
         return int((~keep).sum())
 
@@ -742,7 +790,7 @@ class _Fitter:
             dropped += 1
         return dropped
 
-    def table(self, t0, resid, sigma, knorm, clip, nan, model_error) -> dict:
+    def table(self, t0, delays, resid, sigma, clip, nan, model_error) -> dict:
         fs, n = self.fs, self.n_samples
         if self.n == 0:
             return empty_columns({"t": float, "side": "<U5", "dv": float, "area": float,
@@ -754,17 +802,17 @@ class _Fitter:
         rpad = np.concatenate([np.zeros(p), resid, np.zeros(p)])
         cpad = np.concatenate([np.zeros(p, bool), clip, np.zeros(p, bool)])
         npad = np.concatenate([np.zeros(p, bool), nan, np.zeros(p, bool)])
-        ksum = self.pulse.rows(self.jw, d, fs).sum(axis=1) / fs
+        ksum = self.kernel_rows(self.jw, d, self.amp).sum(axis=1) / fs
         area = self.amp * ksum + rpad[c[:, None] + self.jw[None, :] + p].sum(axis=1) / fs
         win = c[:, None] + self.jl[None, :] + p
         main = c[:, None] + np.arange(-2, 3)[None, :] + p
         return {
-            "t": t0 + self.pos / fs,
+            "t": t0 + self.pos / fs - self.side_value(delays),
             "side": np.where(self.amp > 0, "right", "left"),
             "dv": self.amp.copy(),
             "area": area,
-            "snr": np.abs(self.amp) * knorm / sigma,
-            "peak": self.amp * self.pulse.peak(fs),
+            "snr": self.snr(sigma),
+            "peak": self.amp * self.side_value(self.peaks),
             "sample": np.clip(c, 0, n - 1),
             "reliable": ~(cpad | npad)[main].any(axis=1),
             "clipped": cpad[win].any(axis=1),
@@ -782,12 +830,12 @@ class _Fitter:
         resolves) most likely hides in it.
         """
         rms = np.sqrt(np.mean(rpad[win] ** 2, axis=1))
-        expected = np.hypot(sigma, model_error * np.abs(self.amp) * self.pulse.peak(self.fs))
+        expected = np.hypot(sigma, model_error * np.abs(self.amp) * self.side_value(self.peaks))
         return rms > _MERGED * expected
 
 
 def _fit_windows(Y, W, grid, basis, Qm, pulse, fs, jl):
-    """Sub-sample delay and area of one pulse per row of ``Y`` (weights ``W``)."""
+    """Sub-sample delay, area and fitted energy of one pulse per row of ``Y`` (weights ``W``)."""
     m = Y.shape[0]
     G = grid.size
     energy = np.empty((m, G))
@@ -823,7 +871,7 @@ def _fit_windows(Y, W, grid, basis, Qm, pulse, fs, jl):
     tr = np.trace(M, axis1=-2, axis2=-1)[..., None, None]
     rhs = np.einsum("nwk,nw->nk", Bw, Y)
     coef = np.linalg.solve(M + (1e-12 * tr + 1e-300) * np.eye(3), rhs[..., None])[..., 0]
-    return delta, coef[:, 0]
+    return delta, coef[:, 0], energy[rows, g]
 
 
 def _alternation_check(table: dict, base: np.ndarray, mu: float,

@@ -47,9 +47,15 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy.optimize import minimize
 
-from ..acquisition import CAUSAL_KINDS, FILTER_KINDS, check_filter, dc_group_delay, pulse_response
+from ..acquisition import (
+    CAUSAL_KINDS,
+    FILTER_KINDS,
+    check_filter,
+    dc_group_delay,
+    pulse_response,
+    pulse_responses,
+)
 from ..errors import InputError
 from .signals import fill_gaps, robust_std, savgol_smooth
 
@@ -286,6 +292,9 @@ class PulseResponse:
     delay_spread : float
         Range (s) of the delays of the models within 5 % of the least misfit: how
         well the recording determines the delay.
+    model_left : PulseModel or None
+        The left wall's model: the same instrument as :attr:`model` (which is the
+        right wall's), its own contact duration (walls of different stiffness).
     """
 
     model: PulseModel
@@ -301,11 +310,21 @@ class PulseResponse:
     seconds: float = 0.0
     entry_shift: float = 0.0
     delay_spread: float = 0.0
+    model_left: PulseModel | None = None
+
+    def model_for(self, sign: int) -> PulseModel:
+        """The model of the right (``sign > 0``) or left wall's pulses."""
+        return self.model if sign > 0 or self.model_left is None else self.model_left
 
     @property
     def delay(self) -> float:
-        """Time (s) from the contact entry to the peak of :attr:`model`."""
+        """Time (s) from the contact entry to the peak of :attr:`model` (right wall)."""
         return self.model.delay(self.sample_rate) - self.entry_shift
+
+    @property
+    def delay_left(self) -> float:
+        """Time (s) from the contact entry to the peak of the left wall's model."""
+        return self.model_for(-1).delay(self.sample_rate) - self.entry_shift
 
     @property
     def width(self) -> float:
@@ -321,6 +340,7 @@ class PulseResponse:
         """JSON-ready summary: ``kind``, ``order``, ``cutoff_hz``, ``tau``, ``delay``, ..."""
         out = self.model.to_dict(self.sample_rate)
         out.update({"delay": self.delay, "delay_spread": self.delay_spread,
+                    "tau_left": self.model_for(-1).tau, "delay_left": self.delay_left,
                     "learned": True, "width": self.width, "n_pulses": self.n_pulses,
                     "misfit": self.misfit, "chi2": self.chi2, "seconds": self.seconds})
         return out
@@ -333,15 +353,21 @@ _PRE_MIN, _POST_MIN = 8, 24        # ... and at least these many samples
 def _window(fs: float) -> tuple[int, int]:
     """Samples before and after the peak in a learning window."""
     return max(_PRE_MIN, int(round(_PRE_S * fs))), max(_POST_MIN, int(round(_POST_S * fs)))
-_REFINE = 3                     # families refined in cut-off and contact duration
+_REFINE = 4                     # families refined in cut-off and contact duration
+_MIN_WALL = 4                   # pulses a wall needs for its own contact duration
+_TWO_WALLS = 1.1                # ... and the misfit of one shared duration must exceed its own
 _RES = 10                       # shift grid points per sample at 6400 Hz ...
 _HALF = 2.0                     # ... over +/- this many samples about the centroid
 
 
 class _Objective:
-    """Misfit of a pulse model to the strong pulses, by variable projection."""
+    """Misfit of a pulse model to the strong pulses, by variable projection.
 
-    def __init__(self, Y: np.ndarray, fs: float, pre: int, post: int):
+    ``sign`` (+1 / -1 per pulse) splits the pulses by wall: :meth:`fit` takes one
+    model per wall (the walls share the instrument, not the contact duration).
+    """
+
+    def __init__(self, Y: np.ndarray, fs: float, pre: int, post: int, sign: np.ndarray):
         self.fs = fs
         self.j = np.arange(-pre, post + 1, dtype=float)
         # project the local straight line out of the data and of every template
@@ -349,6 +375,7 @@ class _Objective:
         self.Q = np.linalg.qr(B)[0]
         self.Y = Y - (Y @ self.Q) @ self.Q.T
         self.yy = float(np.sum(self.Y ** 2))
+        self.groups = [np.flatnonzero(sign > 0), np.flatnonzero(sign <= 0)]
         # shifts on a grid of 1/res sample over +/- half samples (fixed in time)
         scale = max(1.0, fs / 6400.0)
         self.res = res = max(1, int(round(_RES / scale)))
@@ -360,38 +387,80 @@ class _Objective:
             + steps.max()
         self.nu = int(self.index.max()) + 1
 
+    @property
+    def two_walls(self) -> bool:
+        """True when both walls have enough pulses to learn their own contact duration."""
+        return min(g.size for g in self.groups) >= _MIN_WALL
+
     def templates(self, model: PulseModel) -> np.ndarray:
         ref = _origin(model, self.fs)
-        # j - shift on a grid of 1/10 sample: evaluate once, index per shift
+        # j - shift on a grid of 1/res sample: evaluate once, index per shift
         u = self.u0 + np.arange(self.nu) * self.step
         g = _response(model, u + ref, self.fs)
         K = g[self.index]
         return K - (K @ self.Q) @ self.Q.T
 
-    def fit(self, model: PulseModel):
-        """(relative misfit, shift per pulse, amplitude per pulse)."""
+    def group_fit(self, model: PulseModel, rows: np.ndarray):
+        """(residual energy, shift, amplitude) of the pulses ``rows`` under ``model``."""
         K = self.templates(model)
         kk = np.einsum("sw,sw->s", K, K)
-        C = self.Y @ K.T                                  # (n, S)
+        C = self.Y[rows] @ K.T                            # (n, S)
         E = C ** 2 / kk[None, :]
         g = np.argmax(E, axis=1)
         gi = np.clip(g, 1, self.shifts.size - 2)
-        rows = np.arange(g.size)
-        e0, e1, e2 = E[rows, gi - 1], E[rows, gi], E[rows, gi + 1]
+        r = np.arange(g.size)
+        e0, e1, e2 = E[r, gi - 1], E[r, gi], E[r, gi + 1]
         den = e0 - 2 * e1 + e2
         with np.errstate(divide="ignore", invalid="ignore"):
             frac = np.where(den < 0, 0.5 * (e0 - e2) / den, 0.0)
         shift = self.shifts[gi] + np.clip(frac, -1, 1) * self.step
-        amp = C[rows, g] / kk[g]
-        return (self.yy - float(np.sum(E[rows, g]))) / self.yy, shift, amp
+        amp = C[r, g] / kk[g]
+        resid = float(np.sum(self.Y[rows] ** 2) - np.sum(E[r, g]))
+        return resid, shift, amp
 
-    def __call__(self, model: PulseModel) -> float:
-        return self.fit(model)[0]
+    def fit(self, models):
+        """(relative misfit, shift per pulse, amplitude per pulse) under (right, left) models."""
+        n = self.Y.shape[0]
+        shift, amp = np.zeros(n), np.zeros(n)
+        resid = 0.0
+        for rows, model in zip(self.groups, models):
+            if rows.size:
+                e, shift[rows], amp[rows] = self.group_fit(model, rows)
+                resid += e
+        return resid / self.yy, shift, amp
+
+    def __call__(self, models) -> float:
+        return self.fit(models)[0]
+
+    def grid(self, kind: str, order: int, cutoffs: np.ndarray, taus: np.ndarray,
+             groups, halfwidth: int) -> np.ndarray:
+        """Residual energy of each group of pulses for every (cut-off, ``tau``) pair.
+
+        All models of the grid are evaluated at once (:func:`pulse_responses`);
+        ``taus`` in samples; ``groups``: index arrays of pulses. Shape (G, C, T).
+        """
+        cs, ts = (v.ravel() for v in np.meshgrid(cutoffs, taus, indexing="ij"))
+        ref = np.zeros(cs.size)
+        if kind in CAUSAL_KINDS:
+            ref = dc_group_delay(kind, order, 0.25) * 0.25 / cs + 0.5 * ts
+        u = self.u0 + np.arange(self.nu) * self.step
+        G = pulse_responses(u[None, :] + ref[:, None], kind, order, cs, ts, halfwidth)
+        K = G[:, self.index]                                         # (M, S, W)
+        K = K - (K @ self.Q) @ self.Q.T
+        kk = np.einsum("msw,msw->ms", K, K)
+        C = (K.reshape(-1, K.shape[-1]) @ self.Y.T).reshape(K.shape[0], K.shape[1], -1)
+        E = (C ** 2 / kk[:, :, None]).max(axis=1)                   # (M, n)
+        yy = np.sum(self.Y ** 2, axis=1)
+        return np.stack([(float(np.sum(yy[rows])) - E[:, rows].sum(axis=1))
+                         .reshape(cutoffs.size, taus.size) for rows in groups])
 
 
 def _strong_pulses(af: np.ndarray, bad: np.ndarray, fs: float, n_pulses: int,
                    min_snr: float, isolation: int, smooth_ms: float, pre: int, post: int):
-    """Peak samples of strong isolated transients and their windows (smooth part removed)."""
+    """Strong isolated transients and their windows (smooth part removed).
+
+    Returns peak samples, windows (flipped to a positive peak), noise, sign (+1: right).
+    """
     n = af.size
     win = max(7, int(round(smooth_ms * 1e-3 * fs)) | 1)
     if win > n:
@@ -399,17 +468,21 @@ def _strong_pulses(af: np.ndarray, bad: np.ndarray, fs: float, n_pulses: int,
     d2 = np.diff(af, 2)[~(bad[2:] | bad[1:-1] | bad[:-2])]
     sigma = robust_std(d2[:: max(1, d2.size // 8192)]) / math.sqrt(6.0)
     if not sigma > 0:
-        return np.zeros(0, dtype=np.int64), np.zeros((0, pre + post + 1)), sigma
-    resid = np.abs(af - savgol_smooth(af, win))
+        return np.zeros(0, dtype=np.int64), np.zeros((0, pre + post + 1)), sigma, np.zeros(0)
+    signed = af - savgol_smooth(af, win)
+    resid = np.abs(signed)
     resid[bad] = 0.0
     idx = np.flatnonzero(resid > min_snr * sigma)
     if idx.size == 0:
-        return idx, np.zeros((0, pre + post + 1)), sigma
+        return idx, np.zeros((0, pre + post + 1)), sigma, np.zeros(0)
     # local maxima over +/- isolation, strongest first; the next pulse is isolated when
-    # nothing above a third of it lies within the window (its own ringing stays below)
+    # nothing above a third of it lies within the window (its own ringing stays below).
+    # Each wall gets up to half the pulses (its own contact duration is learned), the
+    # other wall's share when it has fewer.
     order = idx[np.argsort(-resid[idx])]
     taken = np.zeros(n, dtype=bool)
-    peaks = []
+    walls = ([], [])
+    half = n_pulses // 2
     for i in order:
         if taken[i]:
             continue
@@ -419,12 +492,13 @@ def _strong_pulses(af: np.ndarray, bad: np.ndarray, fs: float, n_pulses: int,
         others = np.r_[seg[: max(i - lo - 3, 0)], seg[i - lo + 4:]]
         if (i - pre - 2 >= 0 and i + post + 2 < n and not bad[i - pre:i + post + 1].any()
                 and (others.size == 0 or others.max() < resid[i] / 3)):
-            peaks.append(i)
-        if len(peaks) >= n_pulses:
+            walls[int(signed[i] < 0)].append(i)
+        if min(len(walls[0]), len(walls[1])) >= half:
             break
-    peaks = np.array(sorted(peaks), dtype=np.int64)
+    keep = [max(half, n_pulses - len(walls[1])), max(half, n_pulses - len(walls[0]))]
+    peaks = np.array(sorted(walls[0][:keep[0]] + walls[1][:keep[1]]), dtype=np.int64)
     if peaks.size == 0:
-        return peaks, np.zeros((0, pre + post + 1)), sigma
+        return peaks, np.zeros((0, pre + post + 1)), sigma, np.zeros(0)
     # the smooth part again with the pulse windows bridged
     mask = bad.copy()
     for i in peaks:
@@ -433,48 +507,79 @@ def _strong_pulses(af: np.ndarray, bad: np.ndarray, fs: float, n_pulses: int,
     jj = peaks[:, None] + np.arange(-pre, post + 1)[None, :]
     Y = af[jj] - base[jj]
     # the sign of the pulse: the side of its largest excursion
-    Y *= np.sign(Y[:, pre])[:, None]
-    return peaks, Y, sigma
+    sign = np.where(Y[:, pre] >= 0, 1.0, -1.0)
+    return peaks, Y * sign[:, None], sigma, sign
+
+
+def _best_cell(R: np.ndarray, two: bool):
+    """(energy, cut-off index, right tau index, left tau index) of the least misfit.
+
+    ``R`` (2, C, T): residual energies of the two walls; with ``two`` each wall takes
+    its own contact duration.
+    """
+    if two:
+        br, bl = R[0].argmin(axis=1), R[1].argmin(axis=1)
+        c = np.arange(R.shape[1])
+        tot = R[0, c, br] + R[1, c, bl]
+        a = int(np.argmin(tot))
+        return float(tot[a]), a, int(br[a]), int(bl[a])
+    tot = R.sum(axis=0)
+    a, b = np.unravel_index(int(np.argmin(tot)), tot.shape)
+    return float(tot[a, b]), int(a), int(b), int(b)
+
+
+def _refine(obj: _Objective, kind: str, order: int, c0: float, tr: float, tl: float,
+            two: bool, halfwidth: int, dl: float):
+    """Coarse to fine: grids of 7 x 7 about the best point, shrunk three-fold five times.
+
+    Returns (residual energy, cut-off, right tau, left tau); taus in samples.
+    """
+    dt = 0.2e-3 * obj.fs
+    for _ in range(5):
+        cs = np.clip(c0 * np.exp(np.linspace(-dl, dl, 7)), 0.02, 0.49)
+        tgr = [np.maximum(t0 + np.linspace(-dt, dt, 7), 0.0) for t0 in (tr, tl)]
+        if two:
+            R = np.concatenate([obj.grid(kind, order, cs, tg, [rows], halfwidth)
+                                for tg, rows in zip(tgr, obj.groups)])
+        else:
+            tgr[1] = tgr[0]
+            R = obj.grid(kind, order, cs, tgr[0], obj.groups, halfwidth)
+        e, a, br, bl = _best_cell(R, two)
+        c0, tr, tl = float(cs[a]), float(tgr[0][br]), float(tgr[1][bl])
+        dl, dt = dl / 3, dt / 3
+    return e, c0, tr, tl
 
 
 def _search(obj: _Objective, kinds, fs: float, halfwidth: int):
-    """Best models, least misfit first.
+    """Best (right, left) model pairs, least misfit first.
 
-    A coarse grid over families, cut-offs and contact durations, then Nelder-Mead in
-    (cut-off, tau) for the best families and their neighbouring orders.
+    Every family (kind and order) on a coarse grid of cut-offs and contact durations
+    (each wall its own duration when :attr:`_Objective.two_walls`), the whole grid
+    evaluated at once; the best families are then refined on grids of 7 x 7 about
+    the best point, shrunk three-fold five times (coarse to fine).
     """
-    cutoffs = np.geomspace(0.08, 0.48, 8)
-    taus = fs * np.array([0.0, 0.05e-3, 0.12e-3, 0.25e-3, 0.5e-3, 1.0e-3])     # samples
+    cutoffs = np.geomspace(0.08, 0.48, 12)
+    taus = fs * np.array([0.0, 0.03, 0.08, 0.15, 0.25, 0.4, 0.6, 1.0]) * 1e-3     # samples
+    two = obj.two_walls
     coarse = {}
     for kind in kinds:
-        for order in ((2, 4, 6, 8) if kind in CAUSAL_KINDS else (0,)):
-            coarse[kind, order] = min(
-                (obj(PulseModel(float(c), halfwidth, ts / fs, kind, order)), float(c), ts)
-                for c in cutoffs for ts in taus)
-    top = sorted(coarse, key=coarse.get)[:_REFINE]
-    starts = {}
-    for kind, order in top:
-        near = (order - 1, order, order + 1) if kind in CAUSAL_KINDS else (order,)
-        for o in near:
-            if (kind in CAUSAL_KINDS and 2 <= o <= 8) or o == order:
-                starts.setdefault((kind, o), coarse[kind, order])
+        for order in (range(2, 9) if kind in CAUSAL_KINDS else (0,)):
+            R = obj.grid(kind, order, cutoffs, taus, obj.groups, halfwidth)
+            e, a, br, bl = _best_cell(R, two)
+            coarse[kind, order] = (e, float(cutoffs[a]), taus[br], taus[bl])
     results = []
-    for (kind, order), (m0, c0, t0) in starts.items():
-        def make(c, tau_s, kind=kind, order=order):
-            return PulseModel(float(c), halfwidth, float(tau_s) / fs, kind, order)
-
-        def f(v, make=make):
-            if not (0.02 < v[0] < 0.49 and v[1] >= 0):
-                return 10.0
-            return obj(make(v[0], v[1]))
-
-        x0 = [c0, max(t0, 0.2)]
-        opt = minimize(f, x0, method="Nelder-Mead",
-                       options={"xatol": 2e-3, "fatol": 1e-7, "maxiter": 50,
-                                "initial_simplex": [x0, [c0 * 1.08, x0[1]],
-                                                    [c0, x0[1] * 1.5 + 0.3]]})
-        v, m = (opt.x, opt.fun) if opt.fun < m0 else ((c0, t0), m0)
-        results.append((float(m), make(*v)))
+    dl = math.log(cutoffs[1] / cutoffs[0])
+    for kind, order in sorted(coarse, key=coarse.get)[:_REFINE]:
+        _, c0, tr, tl = coarse[kind, order]
+        e, c, tr, tl = _refine(obj, kind, order, c0, tr, tl, two, halfwidth, dl)
+        if two:
+            # one duration for both walls unless the walls' own fit the pulses clearly better
+            e1, c1, t1, _ = _refine(obj, kind, order, c0, 0.5 * (tr + tl), 0.5 * (tr + tl),
+                                    False, halfwidth, dl)
+            if e1 <= _TWO_WALLS * e:
+                e, c, tr, tl = e1, c1, t1, t1
+        results.append((e / obj.yy, (PulseModel(c, halfwidth, tr / fs, kind, order),
+                                     PulseModel(c, halfwidth, tl / fs, kind, order))))
     results.sort(key=lambda r: r[0])
     return results
 
@@ -527,51 +632,64 @@ def learn_pulse(a: np.ndarray, fs: float, bad: np.ndarray | None = None, *,
     fs = float(fs)
     pre, post = _window(fs)
     isolation = max(int(isolation), int(round(isolation * fs / 6400.0)))
-    peaks, Y, sigma = _strong_pulses(af, bad, fs, int(n_pulses), float(min_snr),
-                                     isolation, float(smooth_ms), pre, post)
+    peaks, Y, sigma, sign = _strong_pulses(af, bad, fs, int(n_pulses), float(min_snr),
+                                           isolation, float(smooth_ms), pre, post)
     if peaks.size < min_pulses:
         return None
-    obj = _Objective(Y, fs, pre, post)
+    # strongest first within each wall (the coarse search uses the first few)
+    order = np.argsort(-np.abs(Y[:, pre]), kind="stable")
+    peaks, Y, sign = peaks[order], Y[order], sign[order]
+    obj = _Objective(Y, fs, pre, post, sign)
     results = _search(obj, tuple(kinds), fs, int(halfwidth))
     best = results[0][1]
     _, shift, amp = obj.fit(best)
     entry_shift, spread = _consensus_entry(obj, results, shift, fs)
-    ref = _origin(best, fs) + (0.0 if best.causal else 0.5 * best.tau * fs)
     # aligned, normalised pulses: times from the contact entry (samples)
-    tj = obj.j[None, :] - shift[:, None] + ref
+    right = sign > 0
+    ref = np.where(right, _entry_ref(best[0], fs), _entry_ref(best[1], fs))
+    tj = obj.j[None, :] - shift[:, None] + ref[:, None]
     P = Y / amp[:, None]
+    main = best[0] if right.sum() >= (~right).sum() else best[1]
+    rows = right if main is best[0] else ~right
     step = 1.0 / 8
-    bins = np.arange(math.floor(tj.min()), math.ceil(tj.max()) + step, step)
-    k = np.clip(np.searchsorted(bins, tj.ravel()) - 1, 0, bins.size - 2)
+    bins = np.arange(math.floor(tj[rows].min()), math.ceil(tj[rows].max()) + step, step)
+    k = np.clip(np.searchsorted(bins, tj[rows].ravel()) - 1, 0, bins.size - 2)
     cnt = np.bincount(k, minlength=bins.size - 1)
-    tot = np.bincount(k, weights=P.ravel(), minlength=bins.size - 1)
+    tot = np.bincount(k, weights=P[rows].ravel(), minlength=bins.size - 1)
     centre = bins[:-1] + step / 2
-    use = cnt >= max(2, peaks.size // 8)
+    use = cnt >= max(2, int(rows.sum()) // 8)
     tmpl_t, tmpl = centre[use], tot[use] / cnt[use]
     # the template's line is the data's smooth-part error: compare with the model
     # after removing a straight line from both
-    model_v = _response(best, tmpl_t if best.causal else tmpl_t - 0.5 * best.tau * fs, fs)
+    model_v = _response(main, tmpl_t if main.causal else tmpl_t - 0.5 * main.tau * fs, fs)
     B = np.stack([np.ones_like(tmpl_t), tmpl_t / max(float(np.ptp(tmpl_t)), 1.0)], axis=1)
     resid = tmpl - model_v
     resid = resid - B @ np.linalg.lstsq(B, resid, rcond=None)[0]
-    misfit = float(np.sqrt(np.mean(resid ** 2)) / best.peak(fs))
+    misfit = float(np.sqrt(np.mean(resid ** 2)) / main.peak(fs))
     dof = max(Y.size - 4 * peaks.size, 1)
     chi2 = results[0][0] * obj.yy / (sigma ** 2 * dof)
     cands = tuple({"kind": m.kind, "order": m.order if m.causal else None,
-                   "cutoff_hz": m.cutoff * fs, "tau": m.tau, "delay": m.delay(fs),
-                   "misfit": float(v)} for v, m in results)
-    return PulseResponse(model=best, sample_rate=fs, n_pulses=int(peaks.size),
+                   "cutoff_hz": m.cutoff * fs, "tau": m.tau, "tau_left": ml.tau,
+                   "delay": m.delay(fs), "misfit": float(v)} for v, (m, ml) in results)
+    return PulseResponse(model=best[0], sample_rate=fs, n_pulses=int(peaks.size),
                          misfit=misfit, chi2=float(chi2), template_t=(tmpl_t - entry_shift) / fs,
                          template=tmpl, pulses_t=(tj - entry_shift) / fs, pulses=P,
                          candidates=cands,
                          seconds=time.perf_counter() - start, entry_shift=entry_shift / fs,
-                         delay_spread=spread / fs)
+                         delay_spread=spread / fs, model_left=best[1])
 
 
-def _entry(model: PulseModel, shift: np.ndarray, fs: float) -> np.ndarray:
-    """Contact entries (samples, relative to the window peaks) placed by a model's fit."""
-    tau_half = 0.0 if model.causal else 0.5 * model.tau * fs
-    return shift - _origin(model, fs) - tau_half
+def _entry_ref(model: PulseModel, fs: float) -> float:
+    """Contact entry to the time origin of :meth:`_Objective.templates` (samples)."""
+    return _origin(model, fs) + (0.0 if model.causal else 0.5 * model.tau * fs)
+
+
+def _entry(obj: _Objective, models, shift: np.ndarray, fs: float) -> np.ndarray:
+    """Contact entries (samples, relative to the window peaks) placed by a model pair's fit."""
+    out = shift.copy()
+    for rows, model in zip(obj.groups, models):
+        out[rows] -= _entry_ref(model, fs)
+    return out
 
 
 def _consensus_entry(obj: _Objective, results, shift: np.ndarray, fs: float):
@@ -584,17 +702,16 @@ def _consensus_entry(obj: _Objective, results, shift: np.ndarray, fs: float):
     the best one's).
     """
     m0, best = results[0]
-    e0 = _entry(best, shift, fs)
+    e0 = _entry(obj, best, shift, fs)
     num = den = 0.0
     offsets = []
-    for m, model in results:
+    for m, models in results:
         if m > 1.05 * m0:
             continue
-        d = float(np.median(_entry(model, obj.fit(model)[1], fs) - e0)) if model is not best \
-            else 0.0
+        d = float(np.median(_entry(obj, models, obj.fit(models)[1], fs) - e0)) \
+            if models is not best else 0.0
         w = math.exp(-(m / m0 - 1.0) / 0.01)
         num += w * d
         den += w
         offsets.append(d)
     return num / den, float(np.ptp(offsets)) if offsets else 0.0
-
