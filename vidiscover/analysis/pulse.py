@@ -23,8 +23,8 @@ the instrument:
    refined by a parabola) and a local straight line; the misfit is the residual
    energy summed over the pulses. Every kind and order is evaluated on a grid of 12
    cut-offs x 8 durations at once (all responses of the grid in one vectorised call);
-   the best families are refined on 7 x 7 grids about their best point, shrunk
-   three-fold five times, and the least misfit wins. The walls share the instrument
+   the best families are refined on 5 x 5 grids about their best point, halved
+   six times, and the least misfit wins. The walls share the instrument
    but not the contact: the strongest pulses are picked per wall (sign), and each wall
    gets its own ``tau`` when that fits more than 10 % better than one shared value
    (a stiff and a soft wall; :attr:`PulseResponse.model_left`).
@@ -534,14 +534,17 @@ def _best_cell(R: np.ndarray, two: bool):
 
 def _refine(obj: _Objective, kind: str, order: int, c0: float, tr: float, tl: float,
             two: bool, halfwidth: int, dl: float):
-    """Coarse to fine: grids of 7 x 7 about the best point, shrunk three-fold five times.
+    """Coarse to fine: grids of 5 x 5 about the best point, halved six times.
 
-    Returns (residual energy, cut-off, right tau, left tau); taus in samples.
+    A grid whose best point lies on its edge is moved there without halving (the
+    valley of (cut-off, tau) runs diagonally), up to 12 grids in all. Returns
+    (residual energy, cut-off, right tau, left tau); taus in samples.
     """
     dt = 0.2e-3 * obj.fs
-    for _ in range(5):
-        cs = np.clip(c0 * np.exp(np.linspace(-dl, dl, 7)), 0.02, 0.49)
-        tgr = [np.maximum(t0 + np.linspace(-dt, dt, 7), 0.0) for t0 in (tr, tl)]
+    halved = 0
+    for _ in range(12):
+        cs = np.clip(c0 * np.exp(np.linspace(-dl, dl, 5)), 0.02, 0.49)
+        tgr = [np.maximum(t0 + np.linspace(-dt, dt, 5), 0.0) for t0 in (tr, tl)]
         if two:
             R = np.concatenate([obj.grid(kind, order, cs, tg, [rows], halfwidth)
                                 for tg, rows in zip(tgr, obj.groups)])
@@ -550,7 +553,13 @@ def _refine(obj: _Objective, kind: str, order: int, c0: float, tr: float, tl: fl
             R = obj.grid(kind, order, cs, tgr[0], obj.groups, halfwidth)
         e, a, br, bl = _best_cell(R, two)
         c0, tr, tl = float(cs[a]), float(tgr[0][br]), float(tgr[1][bl])
-        dl, dt = dl / 3, dt / 3
+        edge = (a in (0, 4) and 0.02 < c0 < 0.49) or any(
+            k in (0, 4) and t0 > 0 for k, t0 in ((br, tr), (bl, tl)))
+        if not edge:
+            dl, dt = dl / 2, dt / 2
+            halved += 1
+            if halved == 6:
+                break
     return e, c0, tr, tl
 
 
@@ -559,8 +568,8 @@ def _search(obj: _Objective, kinds, fs: float, halfwidth: int):
 
     Every family (kind and order) on a coarse grid of cut-offs and contact durations
     (each wall its own duration when :attr:`_Objective.two_walls`), the whole grid
-    evaluated at once; the best families are then refined on grids of 7 x 7 about
-    the best point, shrunk three-fold five times (coarse to fine).
+    evaluated at once; the best families are then refined on grids of 5 x 5 about
+    the best point, halved six times (coarse to fine).
     """
     cutoffs = np.geomspace(0.08, 0.48, 12)
     taus = fs * np.array([0.0, 0.03, 0.08, 0.15, 0.25, 0.4, 0.6, 1.0]) * 1e-3     # samples
@@ -573,10 +582,10 @@ def _search(obj: _Objective, kinds, fs: float, halfwidth: int):
             coarse[kind, order] = (e, float(cutoffs[a]), taus[br], taus[bl])
     results = []
     dl = math.log(cutoffs[1] / cutoffs[0])
-    for kind, order in sorted(coarse, key=coarse.get)[:_REFINE]:
+    for rank, (kind, order) in enumerate(sorted(coarse, key=coarse.get)[:_REFINE]):
         _, c0, tr, tl = coarse[kind, order]
         e, c, tr, tl = _refine(obj, kind, order, c0, tr, tl, two, halfwidth, dl)
-        if two:
+        if two and rank < 2:
             # one duration for both walls unless the walls' own fit the pulses clearly better
             e1, c1, t1, _ = _refine(obj, kind, order, c0, 0.5 * (tr + tl), 0.5 * (tr + tl),
                                     False, halfwidth, dl)
