@@ -17,7 +17,7 @@ from analysis_sim import ASYM, simulation
 from scipy import signal
 
 from vidiscover import InputError, Metadata, Recording, SensorConfig, record
-from vidiscover.acquisition import CHEBY1_RIPPLE_DB, dc_group_delay, pulse_response
+from vidiscover.acquisition import CHEBY1_RIPPLE_DB, dc_group_delay, pulse_response, pulse_responses
 from vidiscover.analysis import PulseModel, detect_impacts, detectable, match_impacts
 from vidiscover.analysis.pulse import learn_pulse
 
@@ -66,8 +66,11 @@ def test_contact_response_is_the_convolution_and_its_centroid_the_group_delay(ki
 
 
 def _scipy_instrument(seed=0, fs=6400.0, kind="butter", order=4, fc=2500.0, tau=0.15e-3,
-                      n_imp=60, os=16):
-    """A record made with scipy.signal: impulses through an oversampled digital filter."""
+                      n_imp=60, os=16, tau_left=None):
+    """A record made with scipy.signal: impulses through an oversampled digital filter.
+
+    Contacts last ``tau`` (``tau_left`` for the negative, left-wall pulses if given).
+    """
     rng = np.random.default_rng(seed)
     fo = fs * os
     n = int(3.0 * fs)
@@ -76,11 +79,12 @@ def _scipy_instrument(seed=0, fs=6400.0, kind="butter", order=4, fc=2500.0, tau=
     t_in = np.sort(rng.uniform(0.05, 2.95, n_imp))
     t_in = t_in[np.r_[True, np.diff(t_in) > 0.01]]
     dv = rng.choice([-1, 1], t_in.size) * rng.uniform(2e-3, 1e-2, t_in.size)
-    m = int(round(tau * fo))
     for ti, d in zip(t_in, dv):
+        tc = tau if d > 0 or tau_left is None else tau_left
+        m = int(round(tc * fo))
         k = int(np.ceil(ti * fo))
         s = (np.arange(k, k + m) / fo - ti)
-        a[k:k + m] += d * np.pi / (2 * tau) * np.sin(np.pi * s / tau)
+        a[k:k + m] += d * np.pi / (2 * tc) * np.sin(np.pi * s / tc)
     if kind == "butter":
         sos = signal.butter(order, fc, fs=fo, output="sos")
     else:
@@ -108,6 +112,38 @@ def test_learned_response_times_a_scipy_instrument():
     assert np.all(np.abs(det.dv[ie] / dv[it] - 1) < 0.02)
     # the super-resolved template agrees with the model
     assert r.misfit < 0.01 and r.n_pulses >= 20
+
+
+def test_walls_of_two_stiffnesses_get_their_own_contact_duration():
+    # right-wall contacts last 0.1 ms, left-wall ones 0.6 ms
+    rec, t_in, dv = _scipy_instrument(seed=2, tau=0.1e-3, tau_left=0.6e-3)
+    det = detect_impacts(rec)
+    r = det.response
+    assert r.model.kind == "butter" and r.model.order == 4
+    assert r.model.tau == pytest.approx(0.1e-3, abs=0.05e-3)          # measured 0.125 ms
+    assert r.model_left.tau == pytest.approx(0.6e-3, rel=0.1)        # measured 0.600 ms
+    assert det.n == t_in.size
+    ie, it = match_impacts(det.t, t_in, 0.5e-3)
+    assert ie.size == t_in.size
+    assert np.all(np.sign(det.dv[ie]) == np.sign(dv[it]))
+    err = det.t[ie] - t_in[it]
+    for sgn in (1, -1):                    # each wall timed with its own delay
+        assert np.median(np.abs(err[dv[it] * sgn > 0])) < 13e-6     # measured 9.5, 2.6 us
+    # one shared duration times the left wall 0.25 ms late (measured 247 us)
+    shared = detect_impacts(rec, pulse=r.model)
+    je, jt = match_impacts(shared.t, t_in, 0.5e-3)
+    left = dv[jt] < 0
+    assert np.median(np.abs(shared.t[je][left] - t_in[jt][left])) > 100e-6
+
+
+def test_pulse_responses_are_pulse_response_row_by_row():
+    t = np.linspace(-4.0, 60.0, 500)[None, :] + np.array([[0.0], [0.37], [1.5], [2.25]])
+    cutoffs, taus = np.array([0.1, 0.3, 0.45, 0.2]), np.array([0.0, 0.7, 3.0, 8.0])
+    for kind, order in (("butter", 4), ("bessel", 8), ("cheby1", 3), ("linear-phase", 0)):
+        got = pulse_responses(t, kind, order, cutoffs, taus)
+        for m in range(4):
+            ref = pulse_response(t[m], kind, order, cutoffs[m], taus[m])
+            assert np.abs(got[m] - ref).max() <= 1e-12 * np.abs(ref).max()
 
 
 def test_learned_response_at_a_high_sample_rate():
