@@ -401,8 +401,9 @@ def demo(out, seed, as_json):
     result = run_demo(out, seed=seed, progress=not as_json)
     lines = [f"demo: {len(result['outputs'])} files written to {out}/; open {result['index']}"]
     for r in result.get("recordings", []):
-        lines.append(f"  {r['name']}: {r['detected']} impacts detected "
-                     f"({r['n_impacts']} true), regime {r['regime_classified'] or 'n/a'} "
+        lines.append(f"  {r['name']}: {r['detected']} impacts detected of "
+                     f"{r['n_detectable']} detectable ({r['n_impacts']} true, the others "
+                     f"below the noise), regime {r['regime_classified'] or 'n/a'} "
                      f"(true {r['regime']}); "
                      f"r right {_fmt(r['r_right_rms'])} (true {_fmt(r['r_right_true_rms'])}), "
                      f"r left {_fmt(r['r_left_rms'])} (true {_fmt(r['r_left_true_rms'])}) "

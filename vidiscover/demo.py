@@ -49,7 +49,7 @@ def run_demo(out: Path, seed: int = 0, progress: bool = True,
     """
     from tqdm.auto import tqdm
 
-    from .analysis import analyze
+    from .analysis import analyze, detectable_truth
     from .io import atomic_directory, write_recording
     from .params import preset
     from .plotting import plot_recording
@@ -82,6 +82,7 @@ def run_demo(out: Path, seed: int = 0, progress: bool = True,
             rest = summary["restitution"]
             recordings.append({"name": stem, "b": b_mm / 1000,
                                "n_impacts": truth.impacts.n,
+                               "n_detectable": int(detectable_truth(truth).sum()),
                                "regime": truth.label,
                                "regime_classified": summary["regime"]["label"],
                                "detected": summary["impacts"]["n"],
