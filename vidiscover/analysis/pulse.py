@@ -48,7 +48,7 @@ from __future__ import annotations
 import functools
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -653,7 +653,8 @@ def learn_pulse(a: np.ndarray, fs: float, bad: np.ndarray | None = None, *,
     order = np.argsort(-np.abs(Y[:, pre]), kind="stable")
     peaks, Y, sign = peaks[order], Y[order], sign[order]
     obj = _Objective(Y, fs, pre, post, sign)
-    results = _search(obj, tuple(kinds), fs, int(halfwidth))
+    results = _unresolved_durations_to_zero(obj, _search(obj, tuple(kinds), fs, int(halfwidth)))
+    results = _polish_cutoff(obj, results)
     best = results[0][1]
     _, shift, amp = obj.fit(best)
     entry_shift, spread = _consensus_entry(obj, results, shift, fs)
@@ -671,6 +672,8 @@ def learn_pulse(a: np.ndarray, fs: float, bad: np.ndarray | None = None, *,
     tot = np.bincount(k, weights=P[rows].ravel(), minlength=bins.size - 1)
     centre = bins[:-1] + step / 2
     use = cnt >= max(2, int(rows.sum()) // 8)
+    if not use.any():                 # few pulses on a sparse phase grid: every bin
+        use = cnt >= 1
     tmpl_t, tmpl = centre[use], tot[use] / cnt[use]
     # the template's line is the data's smooth-part error: compare with the model
     # after removing a straight line from both
@@ -690,6 +693,54 @@ def learn_pulse(a: np.ndarray, fs: float, bad: np.ndarray | None = None, *,
                          candidates=cands,
                          seconds=time.perf_counter() - start, entry_shift=entry_shift / fs,
                          delay_spread=spread / fs, model_left=best[1])
+
+
+def _polish_cutoff(obj: _Objective, results):
+    """The best models' common cut-off refined continuously (bounded Brent search).
+
+    The grid search leaves the cut-off on a grid of finite step; pulse areas, and so
+    the LO velocity jumps, scale with the error. The cut-off is a property of the
+    instrument, shared by both walls' models.
+    """
+    from scipy.optimize import minimize_scalar
+
+    m0, (mr, ml) = results[0]
+    c = mr.cutoff
+    lo, hi = 0.98 * c, min(1.02 * c, 0.499)
+
+    def cost(x):
+        return obj((replace(mr, cutoff=x), replace(ml, cutoff=x)))
+
+    sol = minimize_scalar(cost, bounds=(lo, hi), method="bounded",
+                          options={"xatol": 1e-6 * c})
+    if not (sol.success and sol.fun < m0):
+        return results
+    best = (replace(mr, cutoff=float(sol.x)), replace(ml, cutoff=float(sol.x)))
+    return [(float(sol.fun), best)] + list(results[1:])
+
+
+def _unresolved_durations_to_zero(obj: _Objective, results):
+    """Instantaneous contacts unless a contact duration is supported by the data.
+
+    A contact much shorter than a sample barely changes the pulse, so the search may
+    settle on a small duration that the noise prefers; its half is then added to every
+    entry time. The instantaneous variant of the best models is kept when it costs
+    less than the Akaike penalty, ``delta chi^2 <= 2`` per duration parameter freed,
+    with chi^2 scaled by the best fit's residual variance (the residual holds the
+    smooth part's error as well as the noise).
+    Models that fit better than it are dropped from the entry consensus, whose
+    weights assume the best model comes first.
+    """
+    m0, (mr, ml) = results[0]
+    if mr.tau == 0.0 and ml.tau == 0.0:
+        return results
+    zero = (replace(mr, tau=0.0), replace(ml, tau=0.0))
+    v0 = obj(zero)
+    k = 1 if mr.tau == ml.tau else 2
+    dof = max(obj.Y.size - 4 * obj.Y.shape[0], 1)
+    if m0 > 0 and (v0 / m0 - 1.0) * dof > 2.0 * k:
+        return results
+    return [(v0, zero)] + [(m, models) for m, models in results if m >= v0]
 
 
 def _entry_ref(model: PulseModel, fs: float) -> float:
