@@ -39,7 +39,8 @@ from collections import defaultdict
 
 import numpy as np
 
-from vidiscover.analysis import PulseModel, analyze, detectable, match_impacts
+from vidiscover.analysis import PulseModel, analyze, detectable
+from vidiscover.analysis.validation import match_impacts_by_wall
 from vidiscover.corpus import N_CASES, realism_corpus
 
 TARGETS = {"count_share": 0.95, "precision": 0.98, "recall": 0.98, "timing_us": 50.0,
@@ -71,14 +72,7 @@ def score_case(case) -> dict:
     ok = detectable(imp.t_in, dv, float(case.sensors.get("a_noise", 0.05)), fs,
                     cutoff=peak / (2 * fs))
     side_true = np.where(np.asarray(imp.side) == "right", 1, -1)
-    side_est = np.where(det.side == "right", 1, -1)
-    ie, it = [], []
-    for sgn in (1, -1):
-        ke, kt = np.flatnonzero(side_est == sgn), np.flatnonzero(side_true == sgn)
-        e, t = match_impacts(det.t[ke], imp.t_in[kt], 0.5e-3)
-        ie.append(ke[e])
-        it.append(kt[t])
-    ie, it = np.concatenate(ie), np.concatenate(it)
+    ie, it = match_impacts_by_wall(det.t, det.side, imp.t_in, imp.side)
     n_ok = int(ok.sum())
     tp = int(ok[it].sum())
     # true episodes below the detectability criterion that were found anyway are real

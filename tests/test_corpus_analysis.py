@@ -27,7 +27,8 @@ import functools
 import numpy as np
 import pytest
 
-from vidiscover.analysis import PulseModel, analyze, detectable, match_impacts
+from vidiscover.analysis import PulseModel, analyze, detectable
+from vidiscover.analysis.validation import match_impacts_by_wall
 from vidiscover.corpus import realism_case
 
 #: case index -> (count error, precision, median timing error in us, worst r error)
@@ -63,14 +64,7 @@ def scored(index: int) -> dict:
     ok = detectable(imp.t_in, dv, float(s.get("a_noise", 0.05)), fs,
                     cutoff=true_filter.peak(fs) / (2 * fs))
     side_true = np.where(np.asarray(imp.side) == "right", 1, -1)
-    side_est = np.where(det.side == "right", 1, -1)
-    ie, it = [], []
-    for sgn in (1, -1):
-        ke, kt = np.flatnonzero(side_est == sgn), np.flatnonzero(side_true == sgn)
-        e, t = match_impacts(det.t[ke], imp.t_in[kt], 0.5e-3)
-        ie.append(ke[e])
-        it.append(kt[t])
-    ie, it = np.concatenate(ie), np.concatenate(it)
+    ie, it = match_impacts_by_wall(det.t, det.side, imp.t_in, imp.side)
     r_err = []
     for side, sgn in (("right", 1), ("left", -1)):
         est = getattr(out.restitution, side)

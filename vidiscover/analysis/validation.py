@@ -40,7 +40,7 @@ import numpy as np
 from ..truth import GroundTruth
 
 __all__ = ["DETECTABLE_SNR", "RESOLUTION", "detectable", "detectable_truth",
-           "match_impacts", "detection_scores", "DetectionScores"]
+           "match_impacts", "match_impacts_by_wall", "detection_scores", "DetectionScores"]
 
 #: Peak SNR a true impact must reach to count as detectable.
 DETECTABLE_SNR = 8.0
@@ -139,6 +139,35 @@ def match_impacts(t_est: np.ndarray, t_true: np.ndarray, tol: float = 0.5e-3
         return np.zeros(0, dtype=int), np.zeros(0, dtype=int)
     arr = np.array(out, dtype=int)
     return arr[:, 0], arr[:, 1]
+
+
+def match_impacts_by_wall(t_est, side_est, t_true, side_true, tol: float = 0.5e-3
+                          ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`match_impacts` within each wall: an impact only matches one on its side.
+
+    Parameters
+    ----------
+    t_est, t_true : ndarray
+        Times (s).
+    side_est, side_true : array of str
+        ``"right"`` / ``"left"``.
+    tol : float
+        Largest accepted time difference (s).
+
+    Returns
+    -------
+    i_est, i_true : ndarray of int
+        Indices of the matched pairs (right wall first).
+    """
+    side_est, side_true = np.asarray(side_est), np.asarray(side_true)
+    t_est, t_true = np.asarray(t_est, dtype=float), np.asarray(t_true, dtype=float)
+    ie, it = [], []
+    for side in ("right", "left"):
+        ke, kt = np.flatnonzero(side_est == side), np.flatnonzero(side_true == side)
+        e, t = match_impacts(t_est[ke], t_true[kt], tol)
+        ie.append(ke[e])
+        it.append(kt[t])
+    return np.concatenate(ie), np.concatenate(it)
 
 
 @dataclass(frozen=True)
