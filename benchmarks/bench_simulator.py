@@ -59,7 +59,9 @@ from vidiscover.params import preset  # noqa: E402
 from vidiscover.simulation import simulate, simulate_reference  # noqa: E402
 
 TOL = 1e-6      # s, impact-time agreement target
-RATIO = 100.0   # speed-up target
+#: Speed-up targets vs solve_ivp (issue 13): one constant r, and the paper's Table 2 walls
+#: (chatter, many events).
+RATIO = {"nominal": 300.0, "chatter": 150.0}
 COMPLIANT_TIME = 1.0    # s, compliant engine on the paper rig, 25.12 s simulated
 RIGID_TOL = 1e-4        # s, compliant (k = 1e8) vs exact impact times over 20 periods
 
@@ -289,8 +291,9 @@ def main(argv=None) -> int:
         print(f"  {'events / steps':22s} {r['sim_events']:12d} {r['ref_steps']:14d}")
         print(f"  {'wall-clock (best)':22s} {r['time_sim_s'] * 1e3:10.2f}ms"
               f" {r['time_ref_s']:13.3f}s")
-        print(f"  speed ratio: {r['ratio']:.0f}x (target >= {RATIO:.0f}x: "
-              f"{'met' if r['ratio'] >= RATIO else 'NOT met'})")
+        target = RATIO["nominal" if r["case"].startswith("nominal") else "chatter"]
+        print(f"  speed ratio: {r['ratio']:.0f}x (target >= {target:.0f}x: "
+              f"{'met' if r['ratio'] >= target else 'NOT met'})")
         print(f"  agreement, record window : {fmt_cmp(r['record'])}")
         print(f"  agreement, first 20 T    : {fmt_cmp(r['first_20_periods'])}")
         print(f"  agreement, all impacts   : {fmt_cmp(r['all'])}")
