@@ -34,4 +34,5 @@ Feature: Bad recordings are refused with one clear line
       | metadata is not valid JSON                 | rec.json | malformed JSON                                     |
       | file is empty                              | rec.csv  | empty file                                         |
       | file is truncated in its last row          | rec.csv  | truncated file                                     |
+      | column "a" reads 0 throughout               | rec.csv  | column 'a' is constant (0 throughout): a dead or disconnected sensor |
       | columns are in mV without sensitivities    | rec.csv  | gives no sensitivity x_mV_per_mm, a_mV_per_g, xe_mV_per_mm |

@@ -294,6 +294,21 @@ def check_units(raw: RawTable, cols: dict[str, str], sig: dict[str, np.ndarray],
                          f"about 1){guess}; {fix}")
 
 
+def check_live(raw: RawTable, cols: dict[str, str], sig: dict[str, np.ndarray]) -> None:
+    """Refuse a flat channel: a dead sensor, an unplugged cable or a channel never recorded.
+
+    The LO displacement and acceleration of a driven rig always move; a channel whose
+    readings never change cannot be analysed (it would read as 'no impact'). A flat
+    base channel is allowed: without a base sensor the cycles are cut with the
+    metadata's frequency, and the analysis says so.
+    """
+    for s in ("x", "a"):
+        if np.ptp(sig[s]) == 0.0:
+            raise InputError(f"{raw.path}: column '{cols[s]}' is constant ({sig[s][0]:g} "
+                             "throughout): a dead or disconnected sensor; check the sensor, "
+                             "its cable and the channel mapping")
+
+
 def build_recording(raw: RawTable, cols: dict[str, str], values: dict[str, np.ndarray],
                     meta: Metadata) -> Recording:
     """Check the values (gaps, time, length, units) and convert them to a Recording."""
@@ -347,6 +362,7 @@ def build_recording(raw: RawTable, cols: dict[str, str], values: dict[str, np.nd
                   else values[s])
     sig["a"] = (values["a"] / sens["a_mV_per_g"] * G_ACCEL if cols["a"] == "a_mV"
                 else values["a"])
+    check_live(raw, cols, sig)
     check_units(raw, cols, sig, meta, fs)
     units = "mV" if any(c.endswith("_mV") for c in cols.values()) else "SI"
     meta = replace(meta, sample_rate=fs, extra={**meta.extra, "units": units})

@@ -147,6 +147,11 @@ def metadata_not_json(rig):
     rig["meta"].write_text(rig["meta"].read_text().replace(",", "", 1))
 
 
+@given(parsers.parse('a recording whose column "{col}" reads 0 throughout'))
+def dead_channel(rig, col):
+    _map_column(rig["path"], col, lambda v: "0")
+
+
 @given("a recording whose columns are in mV without sensitivities")
 def mv_without_sensitivities(rig):
     lines = _lines(rig["path"])
