@@ -64,7 +64,7 @@ from ..effects import Effects
 from ..errors import InputError
 from ..params import G_ACCEL, SystemParams
 from .contact import ContactModel
-from .engine import SimOptions, _Loop, _Model
+from .engine import SimOptions, _Loop, _Model, initial_state
 from .result import ImpactTable, SimulationResult
 from .roots import bracketed_newton
 
@@ -409,13 +409,7 @@ class _CompliantLoop(_Loop):
     # ---------------------------------------------------------------- loop
     def run(self) -> CompliantResult:
         cm, opt = self.cm, self.cm.opt
-        if opt.initial is None:
-            x, v, y, w = 0.0, 0.0, 0.0, float(opt.ball_speed)
-        else:
-            x, v, y, w = (float(s) for s in opt.initial)
-            if abs(y - x) > cm.b:
-                raise InputError(f"initial ball position is outside the clearance: "
-                                 f"|y - x| = {abs(y - x)!r} m > b = {cm.b!r} m")
+        x, v, y, w = initial_state(opt, cm.b)
         self.status, self.message = 0, "reached the end of the record"
         t, X = 0.0, np.array([x, v, y - x, w - v])
         start_wall = 0
@@ -920,11 +914,6 @@ class CompliantResult(SimulationResult):
         return cls(cm.p, cm.fx, cm.b, cm.opt.settle, cm.opt.duration,
                    ImpactTable.from_rows(loop.impacts), [], loop.status, loop.message,
                    loop.n_events, seg, cm, cm.contact)
-
-    @property
-    def t_end(self) -> float:
-        """End of the simulated span (s)."""
-        return float(self._segments["t1"][-1]) if self._segments["t1"].size else 0.0
 
     def evaluate(self, t) -> dict[str, np.ndarray]:
         """State at times ``t`` (simulation clock), accurate inside contacts too.

@@ -196,6 +196,21 @@ def simulate(params: SystemParams, effects: Effects | None = None,
     return _Loop(model).run()
 
 
+def initial_state(opt: SimOptions, b: float) -> tuple[float, float, float, float]:
+    """The state (x, x', y, y') at t = 0 of both engines.
+
+    ``opt.initial``, or the LO at rest and the ball at the centre moving at
+    ``opt.ball_speed``; a one-line error if the ball starts outside |z| <= b.
+    """
+    if opt.initial is None:
+        return 0.0, 0.0, 0.0, float(opt.ball_speed)
+    x, v, y, w = (float(s) for s in opt.initial)
+    if abs(y - x) > b:
+        raise InputError(f"initial ball position is outside the clearance: "
+                         f"|y - x| = {abs(y - x)!r} m > b = {b!r} m")
+    return x, v, y, w
+
+
 def _after_extremum(p: float, q: float, fp: float, fq: float) -> float:
     """Root estimate of f on [p, q] when f'(p) = 0: f ~ fp + (fq - fp) ((t - p)/(q - p))^2.
 
@@ -230,14 +245,8 @@ class _Loop:
 
     # ------------------------------------------------------------------ loop
     def run(self) -> SimulationResult:
-        m, opt = self.m, self.m.opt
-        if opt.initial is None:
-            x, v, y, w = 0.0, 0.0, 0.0, float(opt.ball_speed)
-        else:
-            x, v, y, w = (float(s) for s in opt.initial)
-            if abs(y - x) > m.b:
-                raise InputError(f"initial ball position is outside the clearance: "
-                                 f"|y - x| = {abs(y - x)!r} m > b = {m.b!r} m")
+        m = self.m
+        x, v, y, w = initial_state(m.opt, m.b)
         t = 0.0
         mode, where, wall = FLIGHT, MIDDLE, MIDDLE
         status, message = 0, "reached the end of the record"
