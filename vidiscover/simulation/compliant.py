@@ -64,7 +64,7 @@ from ..effects import Effects
 from ..errors import InputError
 from ..params import G_ACCEL, SystemParams
 from .contact import ContactModel
-from .engine import SimOptions, _Loop, _Model, initial_state
+from .engine import SimOptions, _Loop, _Model, initial_state, merge_options
 from .result import ImpactTable, SimulationResult
 from .roots import bracketed_newton
 
@@ -961,15 +961,7 @@ class CompliantResult(SimulationResult):
 
 def _prepare(params, effects, contact, options, option_kw) -> _CModel:
     effects = effects if effects is not None else Effects()
-    options = options if options is not None else SimOptions()
-    if option_kw:
-        known = {f.name for f in dataclasses.fields(SimOptions)}
-        unknown = sorted(set(option_kw) - known)
-        if unknown:
-            raise InputError(f"unknown simulation option(s) {', '.join(unknown)}; "
-                             f"known: {', '.join(sorted(known))}")
-        options = dataclasses.replace(options, **option_kw)
-    return _CModel(params, effects, as_contact_model(contact), options)
+    return _CModel(params, effects, as_contact_model(contact), merge_options(options, option_kw))
 
 
 def simulate_compliant(params: SystemParams, effects: Effects | None = None,

@@ -183,17 +183,23 @@ def simulate(params: SystemParams, effects: Effects | None = None,
         from .compliant import simulate_compliant
         return simulate_compliant(params, effects, options, contact, **option_kw)
     effects = effects if effects is not None else Effects()
-    options = options if options is not None else SimOptions()
-    if option_kw:
-        import dataclasses
-        known = {f.name for f in dataclasses.fields(SimOptions)}
-        unknown = sorted(set(option_kw) - known)
-        if unknown:
-            raise InputError(f"unknown simulation option(s) {', '.join(unknown)}; "
-                             f"known: {', '.join(sorted(known))}")
-        options = dataclasses.replace(options, **option_kw)
-    model = _Model(params, effects, options)
+    model = _Model(params, effects, merge_options(options, option_kw))
     return _Loop(model).run()
+
+
+def merge_options(options: SimOptions | None, option_kw: dict) -> SimOptions:
+    """``options`` (default :class:`SimOptions`) with keyword overrides, checked by name."""
+    import dataclasses
+
+    options = options if options is not None else SimOptions()
+    if not option_kw:
+        return options
+    known = {f.name for f in dataclasses.fields(SimOptions)}
+    unknown = sorted(set(option_kw) - known)
+    if unknown:
+        raise InputError(f"unknown simulation option(s) {', '.join(unknown)}; "
+                         f"known: {', '.join(sorted(known))}")
+    return dataclasses.replace(options, **option_kw)
 
 
 def initial_state(opt: SimOptions, b: float) -> tuple[float, float, float, float]:
