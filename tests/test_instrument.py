@@ -55,6 +55,21 @@ def _delay_of(kind, order, fs_os):
     return sum(signal.group_delay((s[:3], s[3:]), w=[1e-6])[1][0] for s in sos) / fs_os
 
 
+def _accel_gain_delay(res, rec):
+    """(g, g D) of a_rec ~ g a(t - D) ~ g (a - D a') away from impacts, the true state
+    at the recording's times, its jerk and the mask of samples used."""
+    t = res.settle + rec.t
+    keep = np.ones(t.size, bool)
+    for ti in res.impacts.t:
+        keep &= np.abs(t - ti) > 0.03
+    st = res.evaluate(t)
+    h = 1e-5
+    jerk = (res.evaluate(t + h)["xdd"] - res.evaluate(t - h)["xdd"]) / (2 * h)
+    g, gd = np.linalg.lstsq(np.column_stack([st["xdd"], -jerk])[keep], rec.a[keep],
+                            rcond=None)[0]
+    return g, gd, st, jerk, keep
+
+
 @pytest.mark.parametrize("kind,order", [("linear-phase", 4), ("butter", 2), ("butter", 6),
                                         ("bessel", 4), ("bessel", 8), ("cheby1", 3),
                                         ("cheby1", 6)])
@@ -65,16 +80,7 @@ def test_anti_alias_delay_and_gain_match_scipy(kind, order):
     # linear-phase: force the oversampled path (no impulses in the kept samples)
     rec, _ = record(_NotImpulsive(res) if kind == "linear-phase" else res,
                     SensorConfig(anti_alias=kind, aa_order=order, **QUIET))
-    t = res.settle + rec.t
-    keep = np.ones(t.size, bool)
-    for ti in res.impacts.t:
-        keep &= np.abs(t - ti) > 0.03
-    st = res.evaluate(t)
-    h = 1e-5
-    jerk = (res.evaluate(t + h)["xdd"] - res.evaluate(t - h)["xdd"]) / (2 * h)
-    # a_rec ~ g a(t - D) ~ g (a - D a')
-    ga, gda = np.linalg.lstsq(np.column_stack([st["xdd"], -jerk])[keep], rec.a[keep],
-                              rcond=None)[0]
+    ga, gda, st, jerk, keep = _accel_gain_delay(res, rec)
     gx, gdx = np.linalg.lstsq(np.column_stack([st["x"], -st["xd"]])[keep], rec.x[keep],
                               rcond=None)[0]
     fs_os = 16 * FS
@@ -100,15 +106,7 @@ def test_mount_resonance_delays_by_its_group_delay():
     res = _smooth()
     f_m, zeta = 2000.0, 0.3
     rec, _ = record(res, SensorConfig(mount_resonance=f_m, mount_zeta=zeta, **QUIET))
-    t = res.settle + rec.t
-    keep = np.ones(t.size, bool)
-    for ti in res.impacts.t:
-        keep &= np.abs(t - ti) > 0.03
-    st = res.evaluate(t)
-    h = 1e-5
-    jerk = (res.evaluate(t + h)["xdd"] - res.evaluate(t - h)["xdd"]) / (2 * h)
-    g, gd = np.linalg.lstsq(np.column_stack([st["xdd"], -jerk])[keep], rec.a[keep],
-                            rcond=None)[0]
+    g, gd, _, _, _ = _accel_gain_delay(res, rec)
     r = 8.0 / f_m                       # |H| at the 8 Hz motion: 1 + r^2 (1 - 2 zeta^2)
     # measured: gain within 2.7e-6, delay within 1.3e-3 relative
     assert g == pytest.approx(1 / np.hypot(1 - r * r, 2 * zeta * r), abs=5e-6)
