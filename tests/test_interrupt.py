@@ -52,3 +52,34 @@ def test_sigint_at_any_point_of_a_multi_file_analyze_leaves_nothing(tmp_path):
         leftovers = [p.name for p in tmp_path.iterdir() if p.name.startswith(".")]
         assert leftovers == [], (delay, leftovers)
     assert interrupted >= 5
+
+
+def test_sigint_while_a_command_module_imports_exits_130_even_if_the_import_breaks(
+        tmp_path):
+    # A half-finished import (here pandas' in CI) can surface as another error type;
+    # after a SIGINT the group reports the interrupt, never that error's traceback.
+    (tmp_path / "vd_boom_cmd.py").write_text(
+        "import os, signal, time\n"
+        "try:\n"
+        "    os.kill(os.getpid(), signal.SIGINT)\n"
+        "    time.sleep(5)\n"
+        "except KeyboardInterrupt:\n"
+        "    raise RuntimeError(\"Option 'x' has already been registered\")\n")
+    script = ("import sys; from vidiscover.cli import main; "
+              "main.lazy_commands['boom'] = 'vd_boom_cmd:cmd'; main()")
+    proc = subprocess.run([sys.executable, "-c", script, "boom"], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=60,
+                          env={**os.environ, "PYTHONPATH": str(tmp_path)})
+    assert proc.returncode == 130, proc.stderr
+    assert proc.stderr.strip() == "vidiscover: interrupted; no output was written"
+
+
+def test_errors_without_an_interrupt_still_propagate(tmp_path):
+    (tmp_path / "vd_bad_cmd.py").write_text("raise RuntimeError('a genuine bug')\n")
+    script = ("from vidiscover.cli import main; "
+              "main.lazy_commands['bad'] = 'vd_bad_cmd:cmd'; main()")
+    proc = subprocess.run([sys.executable, "-c", script, "bad"], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=60,
+                          env={**os.environ, "PYTHONPATH": str(tmp_path)})
+    assert proc.returncode == 1
+    assert "a genuine bug" in proc.stderr

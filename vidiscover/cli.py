@@ -141,6 +141,33 @@ class LazyGroup(click.Group):
     def list_commands(self, ctx):
         return sorted(set(super().list_commands(ctx)) | set(self.lazy_commands))
 
+    def invoke(self, ctx):
+        # Ctrl-C can land anywhere, also while a command module (and pandas, scipy
+        # ...) is being imported, where a half-finished import may surface as some
+        # other error. Whatever escapes after a SIGINT is reported as the interrupt.
+        import signal
+
+        interrupted = []
+
+        def on_sigint(signum, frame):
+            interrupted.append(signum)
+            raise KeyboardInterrupt
+
+        try:
+            previous = signal.signal(signal.SIGINT, on_sigint)
+        except ValueError:                     # not the main thread: leave it be
+            previous = None
+        try:
+            return super().invoke(ctx)
+        except (KeyboardInterrupt, Exception):
+            if not interrupted:
+                raise
+            click.echo("vidiscover: interrupted; no output was written", err=True)
+            sys.exit(130)
+        finally:
+            if previous is not None:
+                signal.signal(signal.SIGINT, previous)
+
     def get_command(self, ctx, cmd_name):
         if cmd_name in self.lazy_commands:
             import importlib
