@@ -26,8 +26,13 @@ from ..effects import Effects
 from ..errors import InputError
 from ..params import G_ACCEL, SystemParams
 from ..simulation.engine import LEFT, MIDDLE, RIGHT, SimOptions, _Loop, _Model
-from .monodromy import (flow_jacobian, impact_reset_jacobian, law_derivative, piece_jacobian,
-                        vector_field)
+from .monodromy import (
+    flow_jacobian,
+    impact_reset_jacobian,
+    law_derivative,
+    piece_jacobian,
+    vector_field,
+)
 
 __all__ = ["ImpactMap", "MapError", "Orbit", "solve_orbit", "orbit_kind", "SIDE_NAME",
            "SIDE_CODE", "UNSUPPORTED_EFFECTS"]
@@ -273,14 +278,17 @@ class Orbit:
 
     @property
     def n_impacts(self) -> int:
+        """Impacts per orbit period."""
         return len(self.sides)
 
     @property
     def max_multiplier(self) -> float:
+        """Largest Floquet multiplier modulus."""
         return float(np.max(np.abs(self.multipliers))) if self.multipliers.size else math.nan
 
     @property
     def stable(self) -> bool:
+        """Found and all multipliers inside the unit circle."""
         return bool(self.found and self.max_multiplier < 1.0)
 
     @property
@@ -291,6 +299,7 @@ class Orbit:
 
     @property
     def kind(self) -> str:
+        """Regime label of the orbit (:func:`orbit_kind`), ``not_found`` if not found."""
         return orbit_kind(self) if self.found else "not_found"
 
     def to_dict(self) -> dict:
