@@ -78,6 +78,7 @@ class BranchPoint:
     multipliers: np.ndarray
     margin: float
     min_speed: float
+    dt_T: tuple = ()  # noqa: N815 - the sweep diagram's column name
 
     @property
     def max_multiplier(self) -> float:
@@ -95,7 +96,7 @@ class BranchPoint:
                 "max_multiplier": self.max_multiplier,
                 "multipliers": [{"re": float(z.real), "im": float(z.imag)}
                                 for z in self.multipliers],
-                "t": float(self.q[0]), "x": float(self.q[1]),
+                "t": float(self.q[0]), "x": float(self.q[1]), "dt_T": list(self.dt_T),
                 "grazing_margin": self.margin, "min_impact_speed": self.min_speed}
 
 
@@ -274,7 +275,9 @@ def continue_orbit(params: SystemParams, effects: Effects | None, orbit: Orbit, 
         mu = np.linalg.eigvals(J)
         mu = mu[np.argsort(-np.abs(mu), kind="stable")]
         margin, speed = imap.flight_margin(pieces)
-        branch.points.append(BranchPoint(float(u[4] * ls), u[:4] * sc, mu, margin, speed))
+        times = [pc.t1 for pc in pieces if pc.event != "reversal"]
+        dts = tuple(float(d) / imap.T for d in np.diff([u[0] * sc[0], *times]))
+        branch.points.append(BranchPoint(float(u[4] * ls), u[:4] * sc, mu, margin, speed, dts))
 
     add(u, J, pieces)
     tests = _tests(J)
