@@ -197,6 +197,8 @@ LAZY_COMMANDS: dict[str, str] = {
     "sweep": "vidiscover.commands.regimes:sweep",
     "gap": "vidiscover.commands.gap:gap",
     "gap-check": "vidiscover.commands.gap:gap_check",
+    "orbits": "vidiscover.commands.orbits:orbits",
+    "continue": "vidiscover.commands.orbits:continue_",
 }
 
 #: One-line help of the lazy commands (shown by ``vidiscover --help``).
@@ -208,6 +210,8 @@ LAZY_HELP: dict[str, str] = {
     "sweep": "Sweep a parameter: table of regimes and a bifurcation diagram.",
     "gap": "Diagnose the sim-to-real gap of a recording against the nominal model.",
     "gap-check": "Validate the gap diagnosis on recordings with withheld effects.",
+    "orbits": "Periodic impacting orbits of the exact model, with their stability.",
+    "continue": "Follow orbit branches through a parameter, with their bifurcations.",
 }
 
 

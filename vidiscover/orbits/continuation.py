@@ -287,6 +287,7 @@ def continue_orbit(params: SystemParams, effects: Effects | None, orbit: Orbit, 
         return pt.margin < graze_tol or pt.min_speed < 10 * graze_tol * vscale
     step = ds
     last_err = None
+    crawl = 0
     while len(branch.points) < max_points:
         try:
             un, An, Jn, pn, its = _correct(prob, u + step * tan, tan)
@@ -315,6 +316,11 @@ def continue_orbit(params: SystemParams, effects: Effects | None, orbit: Orbit, 
             return branch
         if last_pt_grazes(branch.points[-1]):
             break
+        crawl = crawl + 1 if step < 1e-5 else 0
+        if crawl >= 10:   # steps stay tiny: a singular point (grazing) is approached
+            last_err = MapError(f"steps below 1e-5 (largest multiplier "
+                                f"{branch.points[-1].max_multiplier:.3g})", "crawl")
+            break
         if its <= 4:
             step = min(step * 1.5, ds_max)
         elif its >= 8:
@@ -325,11 +331,14 @@ def continue_orbit(params: SystemParams, effects: Effects | None, orbit: Orbit, 
     last = branch.points[-1]
     reason = getattr(last_err, "reason", str(last_err))
     kind = getattr(last_err, "kind", "other")
-    if kind == "sequence" or last_pt_grazes(last):
+    if kind == "sequence" or last_pt_grazes(last) or (kind == "crawl" and (
+            last.margin < 0.05 or last.min_speed < 0.05 * vscale)):
+        what = ("a low-velocity grazing impact is approached" if kind == "crawl" else
+                "the impact sequence changes beyond this point")
         branch.bifurcations.append(Bifurcation(
             "grazing", last.value, last.q,
-            f"the impact sequence changes beyond this point ({reason}); wall margin "
-            f"{last.margin:.2g} b, slowest impact {last.min_speed:.3g} m/s"))
+            f"{what} ({reason}); wall margin {last.margin:.2g} b, slowest impact "
+            f"{last.min_speed:.3g} m/s"))
         branch.end_reason = "grazing: " + reason
     elif kind == "stick":
         branch.bifurcations.append(Bifurcation("stick", last.value, last.q, reason))

@@ -1,0 +1,69 @@
+"""``vidiscover orbits`` and ``vidiscover continue``: JSON keys, outputs, bad input."""
+
+import json
+
+from click.testing import CliRunner
+
+from vidiscover.cli import main
+
+
+def _run(args):
+    return CliRunner().invoke(main, args, catch_exceptions=False)
+
+
+def test_orbits_json_has_the_contract_keys():
+    res = _run(["orbits", "--preset", "paper", "--b", "0.012", "--json"])
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.output)
+    assert len(doc["orbits"]) == 2
+    kinds = {(o["kind"], o["stable"]) for o in doc["orbits"]}
+    assert kinds == {("2ipc_sym", True), ("2ipc_sym", False)}
+    for o in doc["orbits"]:
+        assert {"kind", "impacts_per_period", "period_cycles", "stable", "multipliers",
+                "impacts"} <= set(o)
+        assert o["impacts_per_period"] == 2 and o["period_cycles"] == 1
+        assert len(o["multipliers"]) == 4
+        assert [i["side"] for i in sorted(o["impacts"], key=lambda i: i["t"])] in (
+            ["right", "left"], ["left", "right"])
+        for i in o["impacts"]:
+            assert 0 <= i["t"] < 0.125 and (i["v"] > 0) == (i["side"] == "right")
+
+
+def test_orbits_not_found_is_a_result_with_the_reason():
+    res = _run(["orbits", "--b", "0.009", "--effect", "asymmetric_restitution=0.8782,0.2018",
+                "--json"])
+    assert res.exit_code == 0
+    doc = json.loads(res.output)
+    assert doc["orbits"] == [] and not doc["found"] and "no periodic" in doc["reason"]
+
+
+def test_continue_writes_outputs_and_reports_the_period_doubling(tmp_path):
+    out = tmp_path / "cont"
+    res = _run(["continue", "--param", "b", "--from", "0.009", "--to", "0.007",
+                "--out", str(out), "--json"])
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.output)
+    assert doc["branches"] and all({"kind", "points"} <= set(b) for b in doc["branches"])
+    pt = doc["branches"][0]["points"][0]
+    assert {"value", "stable", "max_multiplier"} <= set(pt)
+    pds = [b for b in doc["bifurcations"] if b["type"] == "period_doubling"]
+    assert pds and abs(pds[0]["value"] - 0.00767) < 1e-5
+    for f in doc["outputs"]:
+        assert (tmp_path / "cont" / f.split("cont/", 1)[1]).is_file()
+    assert json.loads((out / "continuation.json").read_text())["bifurcations"]
+
+
+def test_bad_input_exits_2_with_one_line(tmp_path):
+    cases = [
+        ["continue", "--param", "nonsense", "--from", "1", "--to", "2", "--out",
+         str(tmp_path / "a")],
+        ["continue", "--param", "b", "--from", "0.01", "--to", "0.01", "--out",
+         str(tmp_path / "b")],
+        ["orbits", "--b", "-0.01"],
+        ["orbits", "--effect", "restitution_drift"],
+    ]
+    for args in cases:
+        res = CliRunner().invoke(main, args)
+        assert res.exit_code == 2, (args, res.output)
+        assert len(res.output.strip().splitlines()) == 1, res.output
+    assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
