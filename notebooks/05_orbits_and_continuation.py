@@ -102,7 +102,7 @@ branches = branches_for_sweep(p, None, "b", B_FROM, B_TO, n_seeds=N_SEEDS)
 bif = pd.DataFrame([{"branch": i, "kind": br.kind, "type": x.type,
                      "b (mm)": round(1e3 * x.value, 5), "detail": x.detail[:70]}
                     for i, br in enumerate(branches) for x in br.bifurcations])
-bif
+print(bif.to_string(index=False))
 
 # %%
 fig = plot_branches(branches, param="b (mm)", scale=1e3)
@@ -160,6 +160,6 @@ for v, label in zip(df["value"], df["label"]):
                   "agree": (label in kinds) if len(kinds) == 1 else None})
 check = pd.DataFrame(check)
 compared = check["agree"].notna()
-print(f"compared at {int(compared.sum())} of {len(check)} points; agreement "
-      f"{check.loc[compared, 'agree'].astype(bool).mean() if compared.any() else float('nan'):.2f}")
-check
+share = check.loc[compared, "agree"].astype(bool).mean() if compared.any() else float("nan")
+print(f"compared at {int(compared.sum())} of {len(check)} points; agreement {share:.2f}")
+print(check.to_string(index=False))
