@@ -275,7 +275,7 @@ def continue_orbit(params: SystemParams, effects: Effects | None, orbit: Orbit, 
         mu = np.linalg.eigvals(J)
         mu = mu[np.argsort(-np.abs(mu), kind="stable")]
         margin, speed = imap.flight_margin(pieces)
-        times = [pc.t1 for pc in pieces if pc.event != "reversal"]
+        times = [pc.t1 for pc in pieces if pc.event in ("right", "left")]
         dts = tuple(float(d) / imap.T for d in np.diff([u[0] * sc[0], *times]))
         branch.points.append(BranchPoint(float(u[4] * ls), u[:4] * sc, mu, margin, speed, dts))
 

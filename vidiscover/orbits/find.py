@@ -41,9 +41,9 @@ def seed_from_simulation(params: SystemParams, effects: Effects | None = None, *
                    ball_speed=ball_speed, initial=initial)
     imp = res.impacts
     idx = np.flatnonzero(imp.t > settle)
-    if idx.size < 2 or imp.stuck[idx].any() or res.sticking and any(
-            s[1] > settle for s in res.sticking):
-        return None
+    if idx.size < 2 or imp.stuck[idx].any() or any(
+            s[1] > settle and s[2] != "middle" for s in res.sticking):
+        return None   # no impacts, or the ball held at a wall (chatter ends in sticking)
     t = imp.t[idx]
     for p in range(1, max_period + 1):
         for n in range(1, idx.size // 2 + 1):

@@ -92,7 +92,7 @@ def impact_reset_jacobian(m1: float, m2: float, rho: float) -> np.ndarray:
 
 
 def piece_jacobian(phi: np.ndarray, f_start: np.ndarray, f_minus: np.ndarray,
-                   grad_g: np.ndarray, reset: np.ndarray) -> np.ndarray:
+                   grad_g: np.ndarray, reset: np.ndarray, g_t: float = 0.0) -> np.ndarray:
     """5x5 Jacobian of ``(X_a, t_a) -> (X_b+, t_b)`` for a flight ending at an event.
 
     Parameters
@@ -107,9 +107,12 @@ def piece_jacobian(phi: np.ndarray, f_start: np.ndarray, f_minus: np.ndarray,
         Gradient of the event function ``g(X) = 0``.
     reset : ndarray (4, 4)
         ``D_R``, the reset's Jacobian (identity for a reversal).
+    g_t : float
+        Explicit time derivative of the event function (the release of a stuck ball
+        depends on the base motion).
     """
     part = np.hstack([phi, -(phi @ f_start)[:, None]])      # dX_b-/d(X_a, t_a), t_b fixed
-    denom = float(grad_g @ f_minus)
+    denom = float(grad_g @ f_minus) + g_t
     dt = -(grad_g @ part) / denom                             # d t_b / d(X_a, t_a)
     out = np.empty((5, 5))
     out[:4] = reset @ (part + np.outer(f_minus, dt))

@@ -11,8 +11,11 @@ whose side sequence is prescribed. A periodic orbit is a zero of
 :mod:`.monodromy`), whose eigenvalues are the Floquet multipliers.
 
 Whatever is not a clean orbit of the prescribed sequence is reported as not found
-with the reason: the impact sequence changes (grazing), the ball sticks (to a wall
-or, with friction, to the LO: stick phases are not supported), Newton diverges.
+with the reason: the impact sequence changes (grazing), the ball sticks to a wall
+(a rebound below ``stick_speed``) or stays stuck to the LO, Newton diverges. Stick
+phases of the ball on the LO (dry friction) are part of the map: the flow then is
+the closed-form flow of the LO carrying the ball, and the release (friction limit
+reached, a time-dependent event) contributes its own saltation term.
 """
 
 from __future__ import annotations
@@ -44,6 +47,25 @@ UNSUPPORTED_EFFECTS = ("restitution_drift",)
 _GRAD_ZERO = np.array([0.0, -1.0, 0.0, 1.0])
 
 
+def _base(m, t: float) -> tuple[float, float, float]:
+    """Base displacement, velocity and acceleration at ``t``."""
+    xe = vxe = axe = 0.0
+    for om, br, bi in m._base_terms:
+        sn, cs = math.sin(om * t), math.cos(om * t)
+        xe += br * sn + bi * cs
+        vxe += om * (br * cs - bi * sn)
+        axe -= om * om * (br * sn + bi * cs)
+    return xe, vxe, axe
+
+
+def stuck_field(m, t: float, X) -> np.ndarray:
+    """``X'`` while the ball moves with the LO (mass m1 + m2, constant m2 g sin theta)."""
+    xe, vxe, _ = _base(m, t)
+    p = m.p
+    a = (p.c1 * (vxe - X[1]) + p.k1 * (xe - X[0]) + m.m2 * m.gs) / m.M
+    return np.array([X[1], a, X[1], a])
+
+
 class MapError(Exception):
     """The impact map is not defined at this state; ``reason`` says why."""
 
@@ -55,13 +77,16 @@ class MapError(Exception):
 
 @dataclass(frozen=True)
 class Piece:
-    """One flight of an orbit, from ``t0`` (state ``X0``) to the event at ``t1``."""
+    """One flight of an orbit, from ``t0`` (state ``X0``) to the event at ``t1``.
+
+    A piece whose event is ``release`` is a stick phase (the ball moves with the LO).
+    """
 
     t0: float
     t1: float
     X0: tuple
     s: int
-    event: str          # "right", "left" or "reversal"
+    event: str          # "right", "left", "reversal", "stick" (flight ends stuck), "release"
     u_minus: float      # relative velocity z' just before the event
 
 
@@ -145,11 +170,9 @@ class ImpactMap:
                                    "sequence")
                 if kind == "zero":
                     s_new = loop._slide_sign(te, x, v, 0.0, MIDDLE)
-                    if s_new is None:
-                        raise MapError(f"the ball sticks to the LO at t = {te:.6g} s "
-                                       "(stick phases are not supported)", "stick")
                     Xm[3] = Xm[1]
-                    pieces.append(Piece(t, te, tuple(X), s, "reversal", 0.0))
+                    pieces.append(Piece(t, te, tuple(X), s, "reversal" if s_new else "stick",
+                                        0.0))
                     if jac:
                         f0 = vector_field(m, t, X, s)
                         fm = vector_field(m, te, Xm, s)
@@ -157,6 +180,8 @@ class ImpactMap:
                                            np.eye(4))
                         Jt = P @ Jt
                     t, X, s, wall = te, Xm, s_new, MIDDLE
+                    if s_new is None:   # stick phase: the ball moves with the LO
+                        t, X, s, Jt = self._stick(t, X, Jt if jac else None, pieces)
                     continue
                 break
             if kind != target:
@@ -190,6 +215,32 @@ class ImpactMap:
             J = Jt[[4, 0, 1, 3]]
         return q_end, J, pieces
 
+    def _stick(self, t, X, Jt, pieces):
+        """A stick phase from ``(t, X)`` to the release; the extended Jacobian updated."""
+        m, loop = self.model, self.loop
+        loop.segs.clear()
+        te, x, v, y, w, s_new = loop._stuck(t, X[0], X[1], X[2], MIDDLE)
+        if s_new == 0:
+            raise MapError(f"the ball stays stuck to the LO from t = {t:.6g} s", "stick")
+        Xr = np.array([x, v, y, w])
+        pieces.append(Piece(t, te, tuple(X), 0, "release", 0.0))
+        if Jt is not None:
+            ph = flow_jacobian(m.stuck, te - t)
+            phi = np.zeros((4, 4))
+            phi[:2, :2] = ph[:2, :2]
+            phi[2, :2] = ph[0, :2]
+            phi[2, 0] -= 1.0
+            phi[2, 2] = 1.0
+            phi[3, :2] = ph[1, :2]
+            f0 = stuck_field(m, t, X)
+            fm = stuck_field(m, te, Xr)
+            p = m.p
+            grad = np.array([-p.k1 / m.M, -p.c1 / m.M, 0.0, 0.0])
+            _, vxe, axe = _base(m, te)
+            g_t = (p.c1 * axe + p.k1 * vxe) / m.M
+            Jt = piece_jacobian(phi, f0, fm, grad, np.eye(4), g_t) @ Jt
+        return te, Xr, s_new, Jt
+
     def residual(self, q, sides, p: int, jac: bool = True):
         """``F(q) = P(q) - q - (p T, 0, 0, 0)`` and its Jacobian ``DP - I``."""
         qe, J, pieces = self.trip(q, sides, jac)
@@ -211,7 +262,9 @@ class ImpactMap:
         osc, m = self.model.free, self.model
         dist, speed = 1.0, math.inf
         for pc in pieces:
-            if pc.event != "reversal":
+            if pc.event == "release":   # a stick phase: z is constant
+                continue
+            if pc.event in ("right", "left"):
                 speed = min(speed, abs(pc.u_minus))
             x0, v0, y0, w0 = pc.X0
             ab = m.gs - m.mug * pc.s
@@ -295,7 +348,7 @@ class Orbit:
     def impacts(self) -> list[dict]:
         """Impacts of one period: time (s, in [t_first, t_first + pT)), side, z'- (m/s)."""
         return [{"t": pc.t1, "side": pc.event, "v": pc.u_minus}
-                for pc in self.pieces if pc.event != "reversal"]
+                for pc in self.pieces if pc.event in ("right", "left")]
 
     @property
     def kind(self) -> str:
@@ -448,6 +501,11 @@ def state_at(imap: ImpactMap, orbit: Orbit, t: float) -> np.ndarray:
         if pc.t0 <= ts <= pc.t1:
             break
     x0, v0, y0, w0 = pc.X0
+    if pc.event == "release":
+        F0 = m.m2 * m.gs
+        C1, C2 = m.stuck.coefficients(pc.t0, x0, v0, F0)
+        x, v, _ = m.stuck.state(ts, pc.t0, C1, C2, F0)
+        return np.array([x, v, x + (y0 - x0), v])
     ab = m.gs - m.mug * pc.s
     F0 = m.mu * m.m2 * G_ACCEL * pc.s
     C1, C2 = m.free.coefficients(pc.t0, x0, v0, F0)
