@@ -25,7 +25,7 @@ import numpy as np
 from ..effects import Effects
 from ..errors import InputError
 from ..params import SystemParams
-from .shooting import SIDE_NAME, ImpactMap, MapError, Orbit, solve_orbit
+from .shooting import SIDE_NAME, ImpactMap, MapError, Orbit, orbit_kind, solve_orbit
 
 __all__ = ["CONTINUATION_PARAMS", "with_value", "param_value", "Branch", "BranchPoint",
            "Bifurcation", "continue_orbit"]
@@ -71,7 +71,11 @@ def with_value(params: SystemParams, effects: Effects, name: str, value: float):
 
 @dataclass
 class BranchPoint:
-    """One orbit on a branch."""
+    """One orbit on a branch.
+
+    ``kind`` is its regime label; it may change along a branch, e.g. ``2ipc_asym`` ->
+    ``2ipc_sym`` as the asymmetry vanishes near a symmetry-breaking point.
+    """
 
     value: float
     q: np.ndarray
@@ -79,6 +83,7 @@ class BranchPoint:
     margin: float
     min_speed: float
     dt_T: tuple = ()  # noqa: N815 - the sweep diagram's column name
+    kind: str = ""
 
     @property
     def max_multiplier(self) -> float:
@@ -92,7 +97,7 @@ class BranchPoint:
 
     def to_dict(self) -> dict:
         """JSON-ready form."""
-        return {"value": self.value, "stable": self.stable,
+        return {"value": self.value, "stable": self.stable, "kind": self.kind,
                 "max_multiplier": self.max_multiplier,
                 "multipliers": [{"re": float(z.real), "im": float(z.imag)}
                                 for z in self.multipliers],
@@ -277,7 +282,10 @@ def continue_orbit(params: SystemParams, effects: Effects | None, orbit: Orbit, 
         margin, speed = imap.flight_margin(pieces)
         times = [pc.t1 for pc in pieces if pc.event in ("right", "left")]
         dts = tuple(float(d) / imap.T for d in np.diff([u[0] * sc[0], *times]))
-        branch.points.append(BranchPoint(float(u[4] * ls), u[:4] * sc, mu, margin, speed, dts))
+        kind = orbit_kind(Orbit(True, "", prob.sides, prob.p, u[:4] * sc, pieces=pieces,
+                                T=imap.T))
+        branch.points.append(BranchPoint(float(u[4] * ls), u[:4] * sc, mu, margin, speed, dts,
+                                         kind))
 
     add(u, J, pieces)
     tests = _tests(J)
