@@ -68,6 +68,17 @@ def test_fold_of_the_symmetric_branch_in_frequency():
     assert len(folds) == 1
     f_fold = folds[0].value
     assert 11.8 < f_fold < 12.0
+    # two Neimark-Sacker points on the way: a complex pair crosses the unit circle
+    ns = [b for b in br.bifurcations if b.type == "neimark_sacker"]
+    assert len(ns) == 2
+    for bif in ns:
+        moduli = []
+        for rel in (-1e-4, 1e-4):
+            o = solve_orbit(ImpactMap(p.replace(frequency=bif.value * (1 + rel))), bif.q,
+                            orb.sides, 1)
+            pair = o.multipliers[np.abs(o.multipliers.imag) > 1e-9]
+            moduli.append(np.abs(pair).max())
+        assert (moduli[0] - 1) * (moduli[1] - 1) < 0
     # Newton finds the orbit just below the fold and none just above
     below = solve_orbit(ImpactMap(p.replace(frequency=f_fold * (1 - 1e-4))), folds[0].q,
                         orb.sides, 1)
@@ -102,6 +113,16 @@ def test_branch_document_and_grazing_end():
     assert 0.006 < br.bifurcations[-1].value < 0.0065
     values = [pt["value"] for pt in d["points"]]
     assert values[0] == pytest.approx(0.012) and min(values) < 0.0065
+
+
+def test_grazing_with_a_wall_ends_the_branch_where_the_sequence_changes():
+    p = preset("paper", b=0.012)
+    fx = Effects.parse(["asymmetric_restitution=0.88,0.7"])
+    br = continue_orbit(p, fx, _orbit(p, fx), "b", 0.004)
+    end = br.bifurcations[-1]
+    assert end.type == "grazing" and "hits the left wall" in end.detail
+    assert 0.0049 < end.value < 0.0051
+    assert br.points[-1].margin < 1e-3       # an interior extremum of z at the left wall
 
 
 def test_continuation_in_an_effect_parameter_finds_the_period_doubling():
