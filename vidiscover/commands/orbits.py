@@ -143,7 +143,7 @@ def human_continue(doc: dict) -> str:
         return doc["reason"]
     lines = []
     for i, b in enumerate(doc["branches"]):
-        vals = [p["value"] for p in b["points"]]
+        vals = [p["value"] for p in b["points"]] or [float("nan")]
         n_st = sum(p["stable"] for p in b["points"])
         lines.append(f"branch {i}: {b['kind']} ({'-'.join(b['sides'])}, p = "
                      f"{b['period_cycles']}), {len(vals)} points, {doc['param']} "

@@ -184,11 +184,28 @@ class _Problem:
             return Fs, None, None, pieces
         A = np.empty((4, 5))
         A[:, :4] = JF * self.sc[None, :] / self.sc[:, None]
-        h = 1e-8
-        Fp = self.imap((u[4] + h) * self.ls).residual(q, self.sides, self.p, False)[0]
-        Fm = self.imap((u[4] - h) * self.ls).residual(q, self.sides, self.p, False)[0]
-        A[:, 4] = (Fp - Fm) / (2 * h) / self.sc
+        A[:, 4] = self._dlam(q, u[4], F) / self.sc
         return Fs, A, J, pieces
+
+    def _dlam(self, q, lam, F):
+        """dF/d(scaled parameter): central differences, one-sided at a range limit."""
+        h = 1e-8
+        out = []
+        for sign in (1.0, -1.0):
+            try:
+                out.append(self.imap((lam + sign * h) * self.ls).residual(
+                    q, self.sides, self.p, False)[0])
+            except MapError:
+                out.append(None)
+        Fp, Fm = out
+        if Fp is not None and Fm is not None:
+            return (Fp - Fm) / (2 * h)
+        if Fp is not None:
+            return (Fp - F) / h
+        if Fm is not None:
+            return (F - Fm) / h
+        raise MapError("the orbit is not defined on either side of this parameter value",
+                       "sequence")
 
 
 def _null(A: np.ndarray, ref: np.ndarray | None) -> np.ndarray:
@@ -270,7 +287,11 @@ def continue_orbit(params: SystemParams, effects: Effects | None, orbit: Orbit, 
     branch = Branch(param, orbit.kind, orbit.sides, orbit.period_cycles)
     lo, hi = sorted((lam0, to))
     u = np.append(orbit.q / sc, lam0 / ls)
-    Fs, A, J, pieces = prob.eval(u)
+    try:
+        Fs, A, J, pieces = prob.eval(u)
+    except MapError as err:
+        branch.end_reason = f"cannot start: {err.reason}"
+        return branch
     tan = _null(A, None)
     if tan[4] * (to - lam0) < 0:
         tan = -tan
@@ -293,6 +314,7 @@ def continue_orbit(params: SystemParams, effects: Effects | None, orbit: Orbit, 
 
     def last_pt_grazes(pt):
         return pt.margin < graze_tol or pt.min_speed < 10 * graze_tol * vscale
+
     step = ds
     last_err = None
     crawl = 0
@@ -366,7 +388,7 @@ def _locate(prob, u0, tan, step, idx, fa, fb, tol):
     a, b = 0.0, step
     sa, sb = fa, fb
     side = 0
-    ua, ub = u0, None
+    ub = None
     J = None
     located = False
     for _ in range(60):
@@ -401,7 +423,6 @@ def _locate(prob, u0, tan, step, idx, fa, fb, tol):
     if not located:
         detail = (f"located to {abs(b - a) * abs(tan[4]) * prob.ls:.2g} only "
                   f"(singular extended system: a branch point?); " + detail)
-    del ua
     return lam, ub[:4] * prob.sc, detail, located
 
 
