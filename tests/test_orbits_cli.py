@@ -30,8 +30,7 @@ def test_orbits_json_has_the_contract_keys():
 
 
 def test_orbits_not_found_is_a_result_with_the_reason():
-    res = _run(["orbits", "--b", "0.009", "--effect", "asymmetric_restitution=0.8782,0.2018",
-                "--json"])
+    res = _run(["orbits", "--b", "0.012", "--effect", "coulomb_friction=1.0", "--json"])
     assert res.exit_code == 0
     doc = json.loads(res.output)
     assert doc["orbits"] == [] and not doc["found"] and "no periodic" in doc["reason"]

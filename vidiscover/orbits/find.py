@@ -41,9 +41,8 @@ def seed_from_simulation(params: SystemParams, effects: Effects | None = None, *
                    ball_speed=ball_speed, initial=initial)
     imp = res.impacts
     idx = np.flatnonzero(imp.t > settle)
-    if idx.size < 2 or imp.stuck[idx].any() or any(
-            s[1] > settle and s[2] != "middle" for s in res.sticking):
-        return None   # no impacts, or the ball held at a wall (chatter ends in sticking)
+    if idx.size < 2 or imp.t[idx[-1]] < res.t_end - 2 * max_period * T:
+        return None   # no impacts, or the ball stays stuck
     t = imp.t[idx]
     for p in range(1, max_period + 1):
         for n in range(1, idx.size // 2 + 1):
@@ -53,6 +52,10 @@ def seed_from_simulation(params: SystemParams, effects: Effects | None = None, *
             if np.all(np.abs(gap[-n - 1:] - p * T) < 1e-4 * T) and np.all(
                     imp.side[idx][n:][-n - 1:] == imp.side[idx][:-n][-n - 1:]):
                 i = idx[-n - 1]
+                while imp.stuck[i]:         # start the sequence at an impact that rebounds
+                    i -= 1
+                if i < idx[0] or imp.stuck[idx[-n - 1]:].all():
+                    return None
                 q = np.array([imp.t[i], imp.x[i], imp.v_plus[i], imp.w_plus[i]])
                 sides = tuple(int(s) for s in imp.side[i:i + n])
                 return q, sides, p

@@ -45,6 +45,7 @@ SIDE_CODE = {"right": RIGHT, "left": LEFT, RIGHT: RIGHT, LEFT: LEFT}
 #: Effects the impact map refuses (time-dependent walls: no periodic orbit).
 UNSUPPORTED_EFFECTS = ("restitution_drift",)
 _GRAD_ZERO = np.array([0.0, -1.0, 0.0, 1.0])
+_MAX_EVENTS = 200   # reversals / stick phases between two impacts of an orbit
 
 
 def _base(m, t: float) -> tuple[float, float, float]:
@@ -153,14 +154,18 @@ class ImpactMap:
         pieces: list[Piece] = []
         wall = side0
         horizon = 3.0 * self.T * max(n, 1)
+        released = None
         for k in range(1, n + 1):
             target = sides[k % n]
-            u = X[3] - X[1]
-            if u * wall >= 0.0:
-                raise MapError(f"the ball does not leave the {SIDE_NAME[wall]} wall "
-                               f"(z' = {u:.3g} m/s)", "stick")
-            s = 1 if u > 0 else -1
-            while True:
+            if released is not None:       # the ball left a wall it was stuck to
+                s = released
+            else:
+                u = X[3] - X[1]
+                if u * wall >= 0.0:
+                    raise MapError(f"the ball does not leave the {SIDE_NAME[wall]} wall "
+                                   f"(z' = {u:.3g} m/s)", "stick")
+                s = 1 if u > 0 else -1
+            for _ in range(_MAX_EVENTS):
                 loop.t_end = t + horizon
                 loop.segs.clear()
                 te, x, v, y, w, kind = loop._flight(t, X[0], X[1], X[2], X[3], s, wall)
@@ -184,6 +189,9 @@ class ImpactMap:
                         t, X, s, Jt = self._stick(t, X, Jt if jac else None, pieces)
                     continue
                 break
+            else:
+                raise MapError(f"more than {_MAX_EVENTS} reversals or stick phases before "
+                               f"impact {k} (the ball creeps with the LO)", "stick")
             if kind != target:
                 raise MapError(f"impact {k} of the sequence hits the {SIDE_NAME[kind]} wall, "
                                f"not the {SIDE_NAME[target]} one (grazing or another orbit)",
@@ -195,13 +203,16 @@ class ImpactMap:
             law = m.laws[SIDE_NAME[kind]]
             r = m.restitution(kind, speed, te)
             up = -r * um
-            if abs(up) < m.opt.stick_speed:
-                raise MapError(f"the ball sticks to the {SIDE_NAME[kind]} wall at t = {te:.6g} s "
-                               f"(rebound {abs(up):.2g} m/s < stick_speed)", "stick")
+            stuck = abs(up) < m.opt.stick_speed   # as the engine: the ball stays at the wall
+            if stuck:
+                if k == n:
+                    raise MapError(f"the closing impact on the {SIDE_NAME[kind]} wall sticks "
+                                   "(start the sequence at an impact that rebounds)", "sequence")
+                up = 0.0
             vp = (m.m1 * Xm[1] + m.m2 * Xm[3] - m.m2 * up) / m.M
             Xp = np.array([Xm[0], vp, Xm[2], vp + up])
             if jac:
-                rho = r + law_derivative(law, speed) * speed
+                rho = 0.0 if stuck else r + law_derivative(law, speed) * speed
                 f0 = vector_field(m, t, X, s)
                 fm = vector_field(m, te, Xm, s)
                 grad = kind * np.array([-1.0, 0.0, 1.0, 0.0])
@@ -209,17 +220,26 @@ class ImpactMap:
                                    impact_reset_jacobian(m.m1, m.m2, rho))
                 Jt = P @ Jt
             t, X, wall = te, Xp, kind
+            released = None
+            if stuck:   # the wall holds the ball, or it slides off at once (as the engine)
+                released = loop._slide_sign(t, X[0], X[1], 0.0, kind)
+                if released is None:
+                    t, X, released, Jt = self._stick(t, X, Jt if jac else None, pieces, kind)
         q_end = np.array([t, X[0], X[1], X[3]])
         J = None
         if jac:
             J = Jt[[4, 0, 1, 3]]
         return q_end, J, pieces
 
-    def _stick(self, t, X, Jt, pieces):
-        """A stick phase from ``(t, X)`` to the release; the extended Jacobian updated."""
+    def _stick(self, t, X, Jt, pieces, where=MIDDLE):
+        """A stick phase (on the LO, or at wall ``where``) from ``(t, X)`` to the release.
+
+        The extended Jacobian ``Jt`` is carried through the stuck flow and the release
+        event (None: no Jacobian).
+        """
         m, loop = self.model, self.loop
         loop.segs.clear()
-        te, x, v, y, w, s_new = loop._stuck(t, X[0], X[1], X[2], MIDDLE)
+        te, x, v, y, w, s_new = loop._stuck(t, X[0], X[1], X[2], where)
         if s_new == 0:
             raise MapError(f"the ball stays stuck to the LO from t = {t:.6g} s", "stick")
         Xr = np.array([x, v, y, w])
