@@ -10,12 +10,16 @@ whose side sequence is prescribed. A periodic orbit is a zero of
 ``P`` (flow Jacobians, event-time derivatives and saltation matrices, see
 :mod:`.monodromy`), whose eigenvalues are the Floquet multipliers.
 
+Stick phases are part of the map, as in the engine: a rebound slower than
+``stick_speed`` leaves the ball stuck to the wall (the end of a chatter sequence),
+and with dry friction the ball can stick to the LO where its relative velocity
+vanishes. The flow then is the closed-form flow of the LO carrying the ball; the
+release (friction or wall force limit reached, a time-dependent event) contributes
+its own saltation term, and the collapsed dimension gives zero multipliers.
+
 Whatever is not a clean orbit of the prescribed sequence is reported as not found
-with the reason: the impact sequence changes (grazing), the ball sticks to a wall
-(a rebound below ``stick_speed``) or stays stuck to the LO, Newton diverges. Stick
-phases of the ball on the LO (dry friction) are part of the map: the flow then is
-the closed-form flow of the LO carrying the ball, and the release (friction limit
-reached, a time-dependent event) contributes its own saltation term.
+with the reason: the impact sequence changes (grazing or another orbit), the ball
+stays stuck or creeps, Newton diverges.
 """
 
 from __future__ import annotations
