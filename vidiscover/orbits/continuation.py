@@ -188,22 +188,19 @@ class _Problem:
         return Fs, A, J, pieces
 
     def _dlam(self, q, lam, F):
-        """dF/d(scaled parameter): central differences, one-sided at a range limit."""
+        """dF/d(scaled parameter) by a forward difference (backward at a range limit).
+
+        Only the corrector and the tangent use it; bifurcations are located with the
+        exact map Jacobian.
+        """
         h = 1e-8
-        out = []
         for sign in (1.0, -1.0):
             try:
-                out.append(self.imap((lam + sign * h) * self.ls).residual(
-                    q, self.sides, self.p, False)[0])
+                Fh = self.imap((lam + sign * h) * self.ls).residual(
+                    q, self.sides, self.p, False)[0]
             except MapError:
-                out.append(None)
-        Fp, Fm = out
-        if Fp is not None and Fm is not None:
-            return (Fp - Fm) / (2 * h)
-        if Fp is not None:
-            return (Fp - F) / h
-        if Fm is not None:
-            return (F - Fm) / h
+                continue
+            return (Fh - F) / (sign * h)
         raise MapError("the orbit is not defined on either side of this parameter value",
                        "sequence")
 
