@@ -131,9 +131,11 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--split", default="test", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
+    ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--json", action="store_true")
     args = ap.parse_args()
-    cases = realism_corpus(args.split, min(args.n, N_CASES[args.split]))
+    cases = realism_corpus(args.split, min(args.start + args.n, N_CASES[args.split]))
+    cases = cases[args.start:]
     print(f"bench_realism: {len(cases)} cases of the {args.split!r} split; "
           f"{platform.machine()}, {os.cpu_count()} cores, load {os.getloadavg()[0]:.2f}")
     rows = []

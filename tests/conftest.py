@@ -2,10 +2,10 @@
 
 import pytest
 
-from vidiscover.corpus import realism_corpus
+from vidiscover.corpus import N_SUITE, realism_corpus
 
 
 @pytest.fixture(scope="session")
 def realism_dev():
     """The development cases of the realism corpus (never the held-back 'test' split)."""
-    return realism_corpus("dev")
+    return realism_corpus("dev", N_SUITE)

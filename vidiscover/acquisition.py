@@ -39,7 +39,7 @@ from scipy.special import i0 as _i0
 from .errors import InputError
 
 __all__ = ["FILTER_KINDS", "CAUSAL_KINDS", "CHEBY1_RIPPLE_DB", "pulse_kernel", "pulse_response",
-           "pulse_responses",
+           "pulse_responses", "contact_shape", "kelvin_voigt_shape", "shape_centroid",
            "dc_group_delay", "check_filter"]
 
 #: Anti-alias filter kinds (``--anti-alias KIND:ORDER:CUTOFF_HZ``; the README's
@@ -77,7 +77,7 @@ def check_filter(kind: str, order: int, cutoff: float) -> None:
 
 
 def pulse_kernel(dt_samples: np.ndarray, sample_rate: float, cutoff: float, tau: float,
-                 halfwidth: int) -> np.ndarray:
+                 halfwidth: int, skew: float = 0.0, phase: float = 0.0) -> np.ndarray:
     """Sampled response (1/s) of the linear-phase chain to a unit-area impact pulse.
 
     The contact half-sine of width ``tau`` is centred on the pulse centre.
@@ -94,6 +94,8 @@ def pulse_kernel(dt_samples: np.ndarray, sample_rate: float, cutoff: float, tau:
         Contact duration (s); 0 for an instantaneous impact.
     halfwidth : int
         Kernel half-width (samples); the kernel is 0 beyond it.
+    skew, phase : float
+        Contact force shape (:func:`contact_shape`); 0, 0 is the half-sine.
 
     Returns
     -------
@@ -111,10 +113,65 @@ def pulse_kernel(dt_samples: np.ndarray, sample_rate: float, cutoff: float, tau:
 
     if tau <= 0:
         return lowpass(dt_samples)
-    nodes, weights = _GAUSS16
+    nodes, _ = _GAUSS16
     s = 0.5 * tau * nodes                                        # pulse on [-tau/2, tau/2]
-    p = (math.pi / (2 * tau)) * np.cos(math.pi * s / tau) * 0.5 * tau * weights
+    p = _shape_weights(np.array([float(skew)]), np.array([float(phase)]))[0]
     return np.tensordot(lowpass(dt_samples[..., None] - s), p, axes=([-1], [0]))
+
+
+def contact_shape(s: np.ndarray, tau: float, skew: float = 0.0,
+                  phase: float = 0.0) -> np.ndarray:
+    """Contact force of unit impulse over ``0 <= s <= tau``: a damped sine arch.
+
+    ``f(s) = N exp(-skew w s) sin(w s + phase)`` with ``w = (pi - phase) / tau``, so
+    that the force ends at zero at ``tau``. ``skew = phase = 0`` is the half-sine of
+    a linear elastic contact; ``skew > 0`` loads the contact's start (Hunt-Crossley
+    with large alpha v), ``skew < 0`` its end; ``phase > 0`` makes the force jump at
+    entry, as a viscous wall's does: a Kelvin-Voigt wall of damping ratio zeta is
+    exactly ``skew = zeta / sqrt(1 - zeta^2)``, ``phase = 2 asin(zeta)``
+    (:func:`kelvin_voigt_shape`).
+    """
+    s = np.asarray(s, dtype=float)
+    w = (math.pi - phase) / tau
+    g = skew * w
+    norm = 1.0 / _arch_area(g, w, phase, tau)
+    return np.where((s >= 0) & (s <= tau), norm * np.exp(-g * s) * np.sin(w * s + phase), 0.0)
+
+
+def kelvin_voigt_shape(zeta: float) -> tuple[float, float]:
+    """(skew, phase) of the contact force of a Kelvin-Voigt wall of damping ratio zeta."""
+    return zeta / math.sqrt(1.0 - zeta * zeta), 2.0 * math.asin(zeta)
+
+
+def _arch_area(g, w, phase, tau):
+    """Integral of ``exp(-g s) sin(w s + phase)`` over [0, tau] (real g, w)."""
+    return (np.exp(1j * phase) * (np.exp((1j * w - g) * tau) - 1.0) / (1j * w - g)).imag
+
+
+def shape_centroid(skew, phase=0.0):
+    """Centroid of :func:`contact_shape` as a fraction of the contact duration."""
+    nodes, _ = _GAUSS16
+    sk = np.atleast_1d(np.asarray(skew, dtype=float))
+    p = _shape_weights(sk, np.broadcast_to(np.asarray(phase, dtype=float), sk.shape))
+    out = p @ (0.5 * (1.0 + nodes))
+    return out if np.ndim(skew) else float(out[0])
+
+
+def _shape_weights(skews: np.ndarray, phases: np.ndarray | None = None) -> np.ndarray:
+    """Gauss-Legendre weights (M, 16) of the contact shapes on [-1, 1], summing to 1."""
+    nodes, weights = _GAUSS16
+    base = 0.25 * math.pi * np.cos(0.5 * math.pi * nodes) * weights
+    skews = np.asarray(skews, dtype=float)
+    phases = np.zeros(skews.shape) if phases is None else np.asarray(phases, dtype=float)
+    bent = (skews != 0) | (phases != 0)
+    p = np.broadcast_to(base, (skews.size, base.size)).copy()
+    if bent.any():
+        x = 0.5 * (1.0 + nodes)                                    # s / tau
+        ph = phases[bent][:, None]
+        arch = (np.exp(-skews[bent][:, None] * (math.pi - ph) * x)
+                * np.sin((math.pi - ph) * x + ph)) * weights
+        p[bent] = arch / arch.sum(axis=1, keepdims=True)
+    return p
 
 
 @functools.lru_cache(maxsize=64)
@@ -183,20 +240,40 @@ def _exp_rows(t: np.ndarray, P: np.ndarray) -> np.ndarray:
     return np.exp(t[..., None] * P[:, None, :])
 
 
-def dc_group_delay(kind: str, order: int, cutoff: float) -> float:
+def dc_group_delay(kind: str, order: int, cutoff: float, mount: float = 0.0,
+                   mount_zeta: float = 0.02) -> float:
     """DC group delay (samples) of a causal kind: the centroid of its impulse response.
 
     ``-H'(0) / H(0) = sum_i -1/p_i`` for ``H(s) = K / prod(s - p_i)``; 0 for
-    ``linear-phase`` (delay-compensated).
+    ``linear-phase`` (delay-compensated). A mounted resonance at ``mount`` (fraction
+    of the sampling rate) adds ``2 mount_zeta / w``.
     """
     if kind == "linear-phase":
         return 0.0
     p, _ = _poles(kind, int(order), float(cutoff))
-    return float(np.sum(-1.0 / p).real)
+    extra = 2.0 * mount_zeta / (2 * math.pi * mount) if mount > 0 else 0.0
+    return float(np.sum(-1.0 / p).real) + extra
+
+
+def _mount_poles(mount: np.ndarray, zeta: np.ndarray) -> np.ndarray:
+    """Pole pairs (M, 2), 1/sample, of mounted resonances at ``mount`` x the sampling rate."""
+    w = 2 * math.pi * np.asarray(mount, dtype=float)[:, None]
+    z = np.asarray(zeta, dtype=float)[:, None]
+    wd = w * np.sqrt(1.0 - z * z)
+    return np.concatenate([-z * w + 1j * wd, -z * w - 1j * wd], axis=1)
+
+
+def _residues(P: np.ndarray) -> np.ndarray:
+    """Residues (M, K) of the unit-DC-gain all-pole systems with poles ``P`` (M, K)."""
+    D = P[:, :, None] - P[:, None, :]
+    K = P.shape[1]
+    D[:, np.arange(K), np.arange(K)] = 1.0
+    return np.prod(-P, axis=1, keepdims=True) / np.prod(D, axis=2)
 
 
 def pulse_response(t: np.ndarray, kind: str, order: int, cutoff: float, tau: float,
-                   halfwidth: int = 24) -> np.ndarray:
+                   halfwidth: int = 24, skew: float = 0.0, phase: float = 0.0,
+                   mount: float = 0.0, mount_zeta: float = 0.02) -> np.ndarray:
     """Response (1/sample) of an anti-alias filter to a unit-area contact pulse.
 
     Parameters
@@ -214,6 +291,12 @@ def pulse_response(t: np.ndarray, kind: str, order: int, cutoff: float, tau: flo
         Contact duration (samples), 0 for an instantaneous impact.
     halfwidth : int
         Half-width (samples) of the ``linear-phase`` kernel.
+    skew, phase : float
+        Shape of the contact force (:func:`contact_shape`); 0, 0: half-sine.
+    mount, mount_zeta : float
+        A mounted accelerometer resonance ``w^2 / (s^2 + 2 zeta w s + w^2)`` before
+        the filter, at ``mount`` times the sampling rate (0: rigid mount; causal
+        kinds only).
 
     Returns
     -------
@@ -223,7 +306,12 @@ def pulse_response(t: np.ndarray, kind: str, order: int, cutoff: float, tau: flo
     check_filter(kind, order, cutoff)
     t = np.asarray(t, dtype=float)
     if kind == "linear-phase":
-        return pulse_kernel(t, 1.0, cutoff, tau, halfwidth)
+        return pulse_kernel(t, 1.0, cutoff, tau, halfwidth, skew, phase)
+    if (tau > 0 and (skew != 0 or phase != 0)) or mount > 0:
+        return pulse_responses(t.reshape(1, -1), kind, order, np.array([cutoff]),
+                               np.array([tau]), halfwidth, np.array([skew]),
+                               np.array([phase]), np.array([mount]),
+                               np.array([mount_zeta]))[0].reshape(t.shape)
     p, res = _poles(kind, int(order), float(cutoff))
     out = np.zeros(t.shape)
     pos = t >= 0
@@ -250,7 +338,10 @@ def pulse_response(t: np.ndarray, kind: str, order: int, cutoff: float, tau: flo
 
 
 def pulse_responses(t: np.ndarray, kind: str, order: int, cutoffs: np.ndarray,
-                    taus: np.ndarray, halfwidth: int = 24) -> np.ndarray:
+                    taus: np.ndarray, halfwidth: int = 24,
+                    skews: np.ndarray | None = None,
+                    phases: np.ndarray | None = None, mounts: np.ndarray | None = None,
+                    mount_zetas: np.ndarray | None = None) -> np.ndarray:
     """:func:`pulse_response` of many (cut-off, contact duration) pairs at once.
 
     Parameters
@@ -265,6 +356,10 @@ def pulse_responses(t: np.ndarray, kind: str, order: int, cutoffs: np.ndarray,
         (samples, >= 0).
     halfwidth : int
         Half-width (samples) of the ``linear-phase`` kernel.
+    skews, phases : ndarray, optional
+        Shape (M,): contact force shapes (:func:`contact_shape`); default 0.
+    mounts, mount_zetas : ndarray, optional
+        Shape (M,): mounted resonances (as :func:`pulse_response`); default none.
 
     Returns
     -------
@@ -274,10 +369,12 @@ def pulse_responses(t: np.ndarray, kind: str, order: int, cutoffs: np.ndarray,
     t = np.asarray(t, dtype=float)
     fc = np.asarray(cutoffs, dtype=float)[:, None]
     tau = np.asarray(taus, dtype=float)[:, None]
+    skew = np.zeros(fc.shape[0]) if skews is None else np.asarray(skews, dtype=float)
+    phase = np.zeros(fc.shape[0]) if phases is None else np.asarray(phases, dtype=float)
     if kind == "linear-phase":
-        # the half-sine by 16-point Gauss quadrature (exact limit at tau = 0)
-        nodes, weights = _GAUSS16
-        p = 0.25 * math.pi * np.cos(0.5 * math.pi * nodes) * weights
+        # the contact shape by 16-point Gauss quadrature (exact limit at tau = 0)
+        nodes, _ = _GAUSS16
+        p = _shape_weights(skew, phase)                               # (M, 16)
         u = t[..., None] - (0.5 * tau * nodes)[:, None, :]           # (M, N, 16)
         # the window does not depend on the cut-off: once per distinct (tau, t) row
         _, first, inv = np.unique(np.column_stack([tau, t]), axis=0, return_index=True,
@@ -286,10 +383,25 @@ def pulse_responses(t: np.ndarray, kind: str, order: int, cutoffs: np.ndarray,
         win = np.where(np.abs(uu) < halfwidth,
                        _i0(_KAISER_BETA * np.sqrt(np.clip(1 - (uu / halfwidth) ** 2, 0, None)))
                        / _i0(_KAISER_BETA), 0.0)[inv.ravel()]
-        return (2 * fc[..., None] * np.sinc(2 * fc[..., None] * u) * win) @ p
+        return np.einsum("mnk,mk->mn", 2 * fc[..., None] * np.sinc(2 * fc[..., None] * u)
+                         * win, p)
     pu, ru = _unit_poles(kind, int(order))
     wc = 2 * math.pi * fc                                             # (M, 1)
     P, R = pu[None, :] * wc, ru[None, :] * wc                         # (M, K)
+    if mounts is not None and np.any(np.asarray(mounts) > 0):
+        mounts = np.asarray(mounts, dtype=float)
+        zetas = (np.full(mounts.shape, 0.02) if mount_zetas is None
+                 else np.asarray(mount_zetas, dtype=float))
+        has = mounts > 0
+        if not has.all():                  # rows with and without: each on its own
+            out = np.empty(t.shape)
+            for rows in (has, ~has):
+                out[rows] = pulse_responses(t[rows], kind, order, fc[rows, 0], tau[rows, 0],
+                                            halfwidth, skew[rows], phase[rows],
+                                            mounts[rows], zetas[rows])
+            return out
+        P = np.concatenate([P, _mount_poles(mounts, zetas)], axis=1)
+        R = _residues(P)
     tp = np.maximum(t, 0.0)
     E = _exp_rows(tp, P)                                              # (M, N, K)
     out = np.zeros(t.shape)
@@ -299,11 +411,23 @@ def pulse_responses(t: np.ndarray, kind: str, order: int, cutoffs: np.ndarray,
     wide = ~inst
     if wide.any():
         T, Pw, Rw, tw = tau[wide], P[wide], R[wide], tp[wide]
-        w = math.pi / T                                               # (M', 1)
-        c = Rw * (0.5 * w) / (Pw * Pw + w * w)
-        late = np.einsum("mnk,mk->mn", E[wide], c * w * (1.0 + np.exp(-Pw * T))).real
-        early = (np.einsum("mnk,mk->mn", E[wide], c * w).real
-                 - np.sin(w * tw) * np.sum(c * Pw, axis=1, keepdims=True).real
-                 - w * np.cos(w * tw) * np.sum(c, axis=1, keepdims=True).real)
+        ph = phase[wide][:, None]
+        w = (math.pi - ph) / T                                        # (M', 1)
+        g = skew[wide][:, None] * w                                   # decay of the shape
+        # f(s) = N exp(-g s) sin(w s + ph) on [0, tau]; per pole p, with q = p + g,
+        # int_0^u f(s) e^{p (t - s)} ds = N e^{p t} / 2i [e^{i ph} (e^{(iw - q) u} - 1)
+        # / (iw - q) - e^{-i ph} (e^{(-iw - q) u} - 1) / (-iw - q)], u = min(t, tau)
+        norm = 1.0 / _arch_area(g, w, ph, T)
+        Q = Pw + g
+        a1 = Rw * np.exp(1j * ph) / (1j * w - Q)                      # (M', K)
+        a2 = Rw * np.exp(-1j * ph) / (-1j * w - Q)
+        late = np.einsum("mnk,mk->mn", E[wide], a1 * (np.exp((1j * w - Q) * T) - 1.0)
+                         - a2 * (np.exp((-1j * w - Q) * T) - 1.0))
+        te = np.minimum(tw, T)                                        # (late: unused)
+        early = (a1.sum(axis=1, keepdims=True) * np.exp((1j * w - g) * te)
+                 - a2.sum(axis=1, keepdims=True) * np.exp((-1j * w - g) * te)
+                 - np.einsum("mnk,mk->mn", E[wide], a1 - a2))
+        late = (norm * late / 2j).real
+        early = (norm * early / 2j).real
         out[wide] = np.where(tw > T, late, early)
     return np.where(t >= 0, out, 0.0)

@@ -38,7 +38,9 @@ given. The filter's ringing is part of that shape, so it is fitted, not counted.
 6. *Pruning.* Pulses below ``threshold``, or below ``threshold`` plus ``mismatch``
    times the SNR of a stronger pulse within the kernel span (its misfit lobes), are
    dropped, and so is the weaker of two same-sign pulses closer than 1.5 samples
-   (one pulse split in two); the neighbours are refitted. A pulse whose fit leaves a
+   (one pulse split in two), and so is a pulse within 1.5 times the learned model
+   error of a stronger one at its lag (:attr:`.pulse.PulseResponse.error_env`:
+   ringing the model lacks); the neighbours are refitted. A pulse whose fit leaves a
    residual above 3 times noise plus model error is flagged ``merged``.
 
 Limit: same-wall pulses of similar strength 2-3 samples apart may be fitted as one
@@ -82,6 +84,7 @@ _LOBE = 2                  # samples each side of a pulse centre bridged for the
 _SAME_WALL_MERGE = 1.5     # same-sign pulses closer than this (samples) are one pulse
 _MERGED = 3.0              # residual / (noise + model error) that flags a merged pulse
 _REBASE_SNR = 20.0         # a later-round pulse this strong makes the smooth part be redone
+_RINGING_MARGIN = 1.5      # a pulse must exceed this x the learned model error of stronger ones
 
 
 @functools.lru_cache(maxsize=32)
@@ -391,6 +394,7 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
     n_start = n_prev = fit.n
     fit.prune(threshold, sigma)
     fit.prune_lobes(threshold, sigma, mismatch)
+    fit.prune_ringing(threshold, sigma, response)
     for _ in range(3):                  # neighbours of a dropped pulse refit, then re-prune
         if fit.n == n_prev:
             break
@@ -398,6 +402,7 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         fit.backfit(base, iterations=1)
         fit.prune(threshold, sigma)
         fit.prune_lobes(threshold, sigma, mismatch)
+        fit.prune_ringing(threshold, sigma, response)
     if fit.n != n_start:
         smooth = smooth_part()
     a_smooth = smooth
@@ -763,6 +768,30 @@ class _Fitter:
         hi = np.searchsorted(self.pos, self.pos + self.hw, side="right")
         others = np.maximum(_window_max(snr, lo, i), _window_max(snr, i + 1, hi))
         keep = snr > threshold + mismatch * others
+        self.pos, self.amp = self.pos[keep], self.amp[keep]
+
+    def prune_ringing(self, threshold: float, sigma: float, response) -> None:
+        """Drop pulses that the learned model error of a stronger pulse explains.
+
+        ``response.error_env`` is the relative residual of the learning pulses about
+        their peaks (ringing the model lacks); a pulse is kept if its SNR exceeds
+        ``threshold`` plus :data:`_RINGING_MARGIN` times that error, at its lag, of
+        every stronger pulse within the learning window.
+        """
+        if response is None or response.error_env.size == 0 or self.n < 2:
+            return
+        snr = self.snr(sigma)
+        lo_lag, hi_lag = float(response.error_lag[0]), float(response.error_lag[-1])
+        lo = np.searchsorted(self.pos, self.pos - hi_lag, side="left")
+        hi = np.searchsorted(self.pos, self.pos - lo_lag, side="right")
+        keep = np.ones(self.n, dtype=bool)
+        for j in range(self.n):
+            i = np.arange(lo[j], hi[j])
+            i = i[(i != j) & (snr[i] > snr[j])]
+            if i.size:
+                floor = threshold + _RINGING_MARGIN * np.max(
+                    snr[i] * response.error_at(self.pos[j] - self.pos[i]))
+                keep[j] = snr[j] > floor
         self.pos, self.amp = self.pos[keep], self.amp[keep]
 
     def drop_before(self, first: np.ndarray) -> int:

@@ -2,8 +2,10 @@
 
 :class:`PulseModel` is the shape the detector fits (:mod:`.impacts`): one of the
 acquisition responses of :mod:`vidiscover.acquisition` (linear-phase windowed sinc,
-causal Butterworth / Bessel / Chebyshev I of order 2-8), optionally convolved with
-a contact half-sine of duration ``tau``, tabulated on a grid of 1/256 sample and
+causal Butterworth / Bessel / Chebyshev I of order 2-8, optionally behind a mounted
+resonance), convolved with a contact force of duration ``tau`` (a half-sine, an arch
+loaded towards one end, or a viscous wall's force that jumps at entry:
+:func:`vidiscover.acquisition.contact_shape`), tabulated on a grid of 1/256 sample and
 referenced to its *peak*, so that fit windows and matched filters stay centred on
 the main lobe whatever the filter's delay. ``delay`` is the time from the contact
 entry to that reference: an impact fitted at ``t_ref`` entered contact at
@@ -28,11 +30,17 @@ the instrument:
    but not the contact: the strongest pulses are picked per wall (sign), and each wall
    gets its own ``tau`` when that fits more than 10 % better than one shared value
    (a stiff and a soft wall; :attr:`PulseResponse.model_left`).
+   The best few families are refined in the contact shape too, and the best model
+   is tried with a mounted resonance (:func:`_mounted`); each is kept only when it
+   cuts the misfit by a quarter (they trade against duration and cut-off, and move
+   the contact entry with them).
 3. *Non-parametric check.* The windows, aligned with the fitted shifts and scaled by
    the fitted amplitudes, are averaged on a grid of 1/8 sample: the super-resolved
    template (:attr:`PulseResponse.template`). Its RMS deviation from the model,
    relative to the peak, is :attr:`PulseResponse.misfit`: a large value says the
-   family does not hold the instrument.
+   family does not hold the instrument. The residual's envelope about the pulses
+   (:attr:`PulseResponse.error_env`, extended along its decay past the window) is
+   what the detector uses to never count a stronger pulse's unmodelled ringing.
 
 The delay comes from the model (causal filters have no flat start to read it
 from): the DC group delay ``sum -1/p_i`` is the centroid of the impulse response,
@@ -57,14 +65,20 @@ from ..acquisition import (
     FILTER_KINDS,
     check_filter,
     dc_group_delay,
+    kelvin_voigt_shape,
     pulse_response,
     pulse_responses,
+    shape_centroid,
 )
 from ..errors import InputError
 from .signals import fill_gaps, robust_std, savgol_smooth
 
 __all__ = ["PulseModel", "PulseResponse", "learn_pulse"]
 
+#: Range of the contact-shape parameter :attr:`PulseModel.skew`.
+SKEW_RANGE = (-2.0, 8.0)
+#: Range of a mounted resonance :attr:`PulseModel.mount` (fraction of the sampling rate).
+MOUNT_RANGE = (0.05, 4.0)
 _OVERSAMPLE = 256          # kernel table points per sample
 _TABLE_PAD = 48
 _MAX_SPAN = 160            # longest kernel half-support (samples)
@@ -93,6 +107,15 @@ class PulseModel:
         Filter kind (:data:`vidiscover.acquisition.FILTER_KINDS`).
     order : int
         Order of a causal kind (2-8; ignored for ``linear-phase``).
+    skew, phase : float
+        Shape of the contact force (:func:`vidiscover.acquisition.contact_shape`):
+        0, 0 is the half-sine; ``skew`` > 0 loads the start of the contact, < 0 its
+        end (in [-2, 8]); ``phase`` in [0, 3) rad makes the force jump at entry, as a
+        viscous (Kelvin-Voigt) wall's does. Irrelevant when ``tau`` is 0.
+    mount, mount_zeta : float
+        A mounted accelerometer resonance before the filter, at ``mount`` times the
+        sampling rate (0: none; causal kinds only; in (0.05, 4): above the Nyquist
+        frequency its ringing is seen aliased), with damping ratio ``mount_zeta``.
     """
 
     cutoff: float = 0.45
@@ -100,6 +123,10 @@ class PulseModel:
     tau: float = 0.0
     kind: str = "linear-phase"
     order: int = 0
+    skew: float = 0.0
+    phase: float = 0.0
+    mount: float = 0.0
+    mount_zeta: float = 0.02
 
     def __post_init__(self) -> None:
         if not (isinstance(self.cutoff, (int, float, np.floating)) and 0 < self.cutoff < 0.5):
@@ -111,6 +138,16 @@ class PulseModel:
         if not (math.isfinite(self.tau) and self.tau >= 0):
             raise InputError(f"tau must be >= 0 s, was {self.tau!r}")
         check_filter(self.kind, self.order, self.cutoff)
+        if not (math.isfinite(self.skew) and SKEW_RANGE[0] <= self.skew <= SKEW_RANGE[1]):
+            raise InputError(f"skew must be in [{SKEW_RANGE[0]}, {SKEW_RANGE[1]}], "
+                             f"was {self.skew!r}")
+        if not (math.isfinite(self.phase) and 0.0 <= self.phase < 3.0):
+            raise InputError(f"phase must be in [0, 3) rad, was {self.phase!r}")
+        if self.mount != 0.0 and not (self.causal and MOUNT_RANGE[0] <= self.mount
+                                      <= MOUNT_RANGE[1] and 0.002 <= self.mount_zeta <= 0.5):
+            raise InputError(f"mount must be 0 or in [{MOUNT_RANGE[0]}, {MOUNT_RANGE[1]}] of "
+                             f"the sampling rate with mount_zeta in [0.002, 0.5], for a causal "
+                             f"kind; was {self.mount!r}, {self.mount_zeta!r} ({self.kind})")
 
     @property
     def causal(self) -> bool:
@@ -122,8 +159,14 @@ class PulseModel:
         return _layout(self, float(fs))[0] / fs
 
     def centroid(self, fs: float) -> float:
-        """Centroid of the response after the contact entry (s): DC group delay + tau/2."""
-        return (dc_group_delay(self.kind, self.order, self.cutoff) / fs + 0.5 * self.tau)
+        """Centroid of the response after the contact entry (s).
+
+        The DC group delay plus the contact shape's centroid (``tau / 2`` for the
+        half-sine).
+        """
+        return (dc_group_delay(self.kind, self.order, self.cutoff, self.mount,
+                               self.mount_zeta) / fs
+                + shape_centroid(self.skew, self.phase) * self.tau)
 
     def response(self, t: np.ndarray, fs: float) -> np.ndarray:
         """Response (1/s) at times ``t`` (s) from the contact entry."""
@@ -184,14 +227,19 @@ class PulseModel:
         """JSON-ready description at sampling rate ``fs`` (Hz)."""
         return {"kind": self.kind, "order": int(self.order) if self.causal else None,
                 "cutoff": float(self.cutoff), "cutoff_hz": float(self.cutoff * fs),
-                "tau": float(self.tau), "delay": self.delay(fs),
+                "tau": float(self.tau), "skew": float(self.skew),
+                "phase": float(self.phase),
+                "mount_hz": float(self.mount * fs) if self.mount else None,
+                "mount_zeta": float(self.mount_zeta) if self.mount else None,
+                "delay": self.delay(fs),
                 "centroid": self.centroid(fs), "peak": self.peak(fs)}
 
 
 def _response(model: PulseModel, t: np.ndarray, fs: float) -> np.ndarray:
     """Response (1/s) at times ``t`` (samples) from the contact entry (causal) or midpoint."""
     return fs * pulse_response(t, model.kind, model.order, model.cutoff, model.tau * fs,
-                               model.halfwidth)
+                               model.halfwidth, model.skew, model.phase, model.mount,
+                               model.mount_zeta)
 
 
 def _origin(model: PulseModel, fs: float) -> float:
@@ -296,6 +344,14 @@ class PulseResponse:
     delay_spread : float
         Range (s) of the delays of the models within 5 % of the least misfit: how
         well the recording determines the delay.
+    error_lag, error_env : ndarray
+        The model's error about a pulse: at lags ``error_lag`` (samples from the
+        pulse reference, the learning window), the 90th percentile over the learning
+        pulses of the residual's magnitude beyond twice the noise, relative to
+        the pulse's peak (running
+        maximum over +/- 2 samples). Ringing the model lacks (a mounted resonance, a
+        contact shape outside the family) shows here; the detector never counts a
+        pulse that this error of a stronger one explains.
     model_left : PulseModel or None
         The left wall's model: the same instrument as :attr:`model` (which is the
         right wall's), its own contact duration (walls of different stiffness).
@@ -315,6 +371,14 @@ class PulseResponse:
     entry_shift: float = 0.0
     delay_spread: float = 0.0
     model_left: PulseModel | None = None
+    error_lag: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+    error_env: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
+
+    def error_at(self, lag: np.ndarray) -> np.ndarray:
+        """:attr:`error_env` at lags (samples; 0 outside the learning window)."""
+        if self.error_env.size == 0:
+            return np.zeros(np.shape(lag))
+        return np.interp(lag, self.error_lag, self.error_env, left=0.0, right=0.0)
 
     def model_for(self, sign: int) -> PulseModel:
         """The model of the right (``sign > 0``) or left wall's pulses."""
@@ -358,6 +422,12 @@ def _window(fs: float) -> tuple[int, int]:
     """Samples before and after the peak in a learning window."""
     return max(_PRE_MIN, int(round(_PRE_S * fs))), max(_POST_MIN, int(round(_POST_S * fs)))
 _REFINE = 4                     # families refined in cut-off and contact duration
+_SHAPED = 1                     # ... of which the best refine the contact shape too
+_COARSE_SHAPED = 4              # families whose coarse grid has every contact shape
+_COARSE_STRIDE = 1              # the coarse grid tries every 2nd shift (ranking only)
+_SHAPE_GAIN = 1.25              # a contact shape is kept when it cuts the misfit by this
+#: Contact shapes of the coarse grid: half-sine, front-loaded arch, viscous wall.
+_COARSE_SHAPES = (("arch", 0.0), ("arch", 2.5), ("kelvin-voigt", 0.35))
 _MIN_WALL = 4                   # pulses a wall needs for its own contact duration
 _TWO_WALLS = 1.1                # ... and the misfit of one shared duration must exceed its own
 _RES = 10                       # shift grid points per sample at 6400 Hz ...
@@ -437,19 +507,36 @@ class _Objective:
         return self.fit(models)[0]
 
     def grid(self, kind: str, order: int, cutoffs: np.ndarray, taus: np.ndarray,
-             groups, halfwidth: int) -> np.ndarray:
+             groups, halfwidth: int, skews: np.ndarray | None = None,
+             phases: np.ndarray | None = None, mount: tuple[float, float] = (0.0, 0.02),
+             mounts: np.ndarray | None = None, zetas: np.ndarray | None = None,
+             stride: int = 1) -> np.ndarray:
         """Residual energy of each group of pulses for every (cut-off, ``tau``) pair.
 
         All models of the grid are evaluated at once (:func:`pulse_responses`);
-        ``taus`` in samples; ``groups``: index arrays of pulses. Shape (G, C, T).
+        ``taus`` in samples; ``skews``, ``phases`` (optional) the contact shape of each
+        ``tau`` (same length); ``mount`` (frequency, damping) a mounted resonance for
+        all, or ``mounts``, ``zetas`` one per ``tau``; ``groups``: index arrays of
+        pulses; ``stride`` > 1 tries every stride-th shift only (a coarse grid's
+        ranking needs no finer alignment). Shape (G, C, T).
         """
+        taus = np.asarray(taus, dtype=float)
+        sk = np.zeros(taus.size) if skews is None else np.asarray(skews, dtype=float)
         cs, ts = (v.ravel() for v in np.meshgrid(cutoffs, taus, indexing="ij"))
+        ph = np.zeros(taus.size) if phases is None else np.asarray(phases, dtype=float)
+        ss, pp = np.tile(sk, np.size(cutoffs)), np.tile(ph, np.size(cutoffs))
+        mm = np.full(taus.size, float(mount[0])) if mounts is None else np.asarray(mounts)
+        zz = np.full(taus.size, float(mount[1])) if zetas is None else np.asarray(zetas)
+        mm, zz = np.tile(mm, np.size(cutoffs)), np.tile(zz, np.size(cutoffs))
         ref = np.zeros(cs.size)
         if kind in CAUSAL_KINDS:
-            ref = dc_group_delay(kind, order, 0.25) * 0.25 / cs + 0.5 * ts
+            extra = np.where(mm > 0, 2 * zz / (2 * math.pi * np.where(mm > 0, mm, 1.0)), 0.0)
+            ref = (dc_group_delay(kind, order, 0.25) * 0.25 / cs + shape_centroid(ss, pp) * ts
+                   + extra)
         u = self.u0 + np.arange(self.nu) * self.step
-        G = pulse_responses(u[None, :] + ref[:, None], kind, order, cs, ts, halfwidth)
-        K = G[:, self.index]                                         # (M, S, W)
+        G = pulse_responses(u[None, :] + ref[:, None], kind, order, cs, ts, halfwidth, ss, pp,
+                            mm if (mm > 0).any() else None, zz)
+        K = G[:, self.index[::stride]]                               # (M, S, W)
         K = K - (K @ self.Q) @ self.Q.T
         kk = np.einsum("msw,msw->ms", K, K)
         C = (K.reshape(-1, K.shape[-1]) @ self.Y.T).reshape(K.shape[0], K.shape[1], -1)
@@ -532,67 +619,131 @@ def _best_cell(R: np.ndarray, two: bool):
     return float(tot[a, b]), int(a), int(b), int(b)
 
 
+#: Contact-shape families of the search: name -> (step of h, range of h, h -> (skew, phase)).
+_SHAPES = {
+    "arch": (1.0, SKEW_RANGE, lambda h: (h, 0.0)),
+    "kelvin-voigt": (0.1, (0.0, 0.9), kelvin_voigt_shape),
+}
+
+
+def _shape_params(family: str, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(skews, phases) of shape parameters ``h`` of a family."""
+    fn = _SHAPES[family][2]
+    pairs = np.array([fn(float(v)) for v in np.ravel(h)]).reshape(-1, 2)
+    return pairs[:, 0], pairs[:, 1]
+
+
 def _refine(obj: _Objective, kind: str, order: int, c0: float, tr: float, tl: float,
-            two: bool, halfwidth: int, dl: float):
+            two: bool, halfwidth: int, dl: float, shape: tuple | None = None):
     """Coarse to fine: grids of 5 x 5 about the best point, halved six times.
 
     A grid whose best point lies on its edge is moved there without halving (the
-    valley of (cut-off, tau) runs diagonally), up to 12 grids in all. Returns
-    (residual energy, cut-off, right tau, left tau); taus in samples.
+    valley of (cut-off, tau) runs diagonally), up to 12 grids in all. With ``shape``
+    ``(family, h_right, h_left)`` the contact shapes of that family (:data:`_SHAPES`)
+    are refined too (3 values per wall and grid). Returns (residual energy, cut-off,
+    right tau, left tau, right h, left h); taus in samples.
     """
     dt = 0.2e-3 * obj.fs
+    family, hr, hl = shape if shape is not None else ("arch", 0.0, 0.0)
+    dh, (lo_h, hi_h), _ = _SHAPES[family]
+    dh = dh if shape is not None else 0.0
     halved = 0
-    for _ in range(12):
+    for _ in range(12 if shape is None else 16):
         cs = np.clip(c0 * np.exp(np.linspace(-dl, dl, 5)), 0.02, 0.49)
-        tgr = [np.maximum(t0 + np.linspace(-dt, dt, 5), 0.0) for t0 in (tr, tl)]
+        cols = []
+        for t0, h0 in ((tr, hr), (tl, hl)):
+            tg = np.maximum(t0 + np.linspace(-dt, dt, 5), 0.0)
+            hg = np.clip(h0 + np.linspace(-dh, dh, 3), lo_h, hi_h) if dh else np.array([h0])
+            T, H = (v.ravel() for v in np.meshgrid(tg, hg, indexing="ij"))
+            cols.append((T, H, *_shape_params(family, H)))
         if two:
-            R = np.concatenate([obj.grid(kind, order, cs, tg, [rows], halfwidth)
-                                for tg, rows in zip(tgr, obj.groups)])
+            R = np.concatenate([obj.grid(kind, order, cs, T, [rows], halfwidth, sk, ph)
+                                for (T, _, sk, ph), rows in zip(cols, obj.groups)])
         else:
-            tgr[1] = tgr[0]
-            R = obj.grid(kind, order, cs, tgr[0], obj.groups, halfwidth)
+            cols[1] = cols[0]
+            T, _, sk, ph = cols[0]
+            R = obj.grid(kind, order, cs, T, obj.groups, halfwidth, sk, ph)
         e, a, br, bl = _best_cell(R, two)
-        c0, tr, tl = float(cs[a]), float(tgr[0][br]), float(tgr[1][bl])
+        c0 = float(cs[a])
+        tr, hr = float(cols[0][0][br]), float(cols[0][1][br])
+        tl, hl = float(cols[1][0][bl]), float(cols[1][1][bl])
+        nh = cols[0][1].size // 5
         edge = (a in (0, 4) and 0.02 < c0 < 0.49) or any(
-            k in (0, 4) and t0 > 0 for k, t0 in ((br, tr), (bl, tl)))
+            k // nh in (0, 4) and t0 > 0 for k, t0 in ((br, tr), (bl, tl))) or any(
+            nh > 1 and k % nh in (0, nh - 1) and t0 > 0 and lo_h < h0 < hi_h
+            for k, t0, h0 in ((br, tr, hr), (bl, tl, hl)))
         if not edge:
-            dl, dt = dl / 2, dt / 2
+            dl, dt, dh = dl / 2, dt / 2, dh / 2
             halved += 1
             if halved == 6:
                 break
-    return e, c0, tr, tl
+    return e, c0, tr, tl, (hr if tr > 0 else 0.0), (hl if tl > 0 else 0.0)
 
 
 def _search(obj: _Objective, kinds, fs: float, halfwidth: int):
     """Best (right, left) model pairs, least misfit first.
 
-    Every family (kind and order) on a coarse grid of cut-offs and contact durations
-    (each wall its own duration when :attr:`_Objective.two_walls`), the whole grid
-    evaluated at once; the best families are then refined on grids of 5 x 5 about
-    the best point, halved six times (coarse to fine).
+    Every family (kind and order) on a coarse grid of cut-offs, contact durations
+    and three contact shapes (:data:`_COARSE_SHAPES`: half-sine, front-loaded arch,
+    viscous wall; each wall its own when :attr:`_Objective.two_walls`), the whole
+    grid evaluated at once; the best families are then refined on grids of 5 x 5
+    about the best point, halved six times (coarse to fine), and their contact
+    shape with them where that pays for its parameter.
     """
     cutoffs = np.geomspace(0.08, 0.48, 12)
     taus = fs * np.array([0.0, 0.03, 0.08, 0.15, 0.25, 0.4, 0.6, 1.0]) * 1e-3     # samples
+    shapes = [(f, h, *(_SHAPES[f][2](h))) for f, h in _COARSE_SHAPES]
     two = obj.two_walls
-    coarse = {}
-    for kind in kinds:
-        for order in (range(2, 9) if kind in CAUSAL_KINDS else (0,)):
-            R = obj.grid(kind, order, cutoffs, taus, obj.groups, halfwidth)
-            e, a, br, bl = _best_cell(R, two)
-            coarse[kind, order] = (e, float(cutoffs[a]), taus[br], taus[bl])
+
+    def coarse_grid(kind, order, ks):
+        cols = [(t, k) for t in taus for k in ks]
+        T = np.array([t for t, _ in cols])
+        SK = np.array([shapes[k][2] for _, k in cols])
+        PH = np.array([shapes[k][3] for _, k in cols])
+        R = obj.grid(kind, order, cutoffs, T, obj.groups, halfwidth, SK, PH,
+                     stride=_COARSE_STRIDE)
+        e, a, br, bl = _best_cell(R, two)
+        return (e, float(cutoffs[a]), T[br], T[bl], cols[br][1], cols[bl][1])
+
+    # every family with the half-sine, then the best few with the other shapes too
+    coarse = {(kind, order): coarse_grid(kind, order, [0]) for kind in kinds
+              for order in (range(2, 9) if kind in CAUSAL_KINDS else (0,))}
+    for fam in sorted(coarse, key=coarse.get)[:_COARSE_SHAPED]:
+        coarse[fam] = min(coarse[fam], coarse_grid(*fam, range(len(shapes))))
     results = []
     dl = math.log(cutoffs[1] / cutoffs[0])
     for rank, (kind, order) in enumerate(sorted(coarse, key=coarse.get)[:_REFINE]):
-        _, c0, tr, tl = coarse[kind, order]
-        e, c, tr, tl = _refine(obj, kind, order, c0, tr, tl, two, halfwidth, dl)
+        _, c0, tr0, tl0, kr, kl = coarse[kind, order]
+        e, c, tr, tl, _, _ = _refine(obj, kind, order, c0, tr0, tl0, two, halfwidth, dl)
         if two and rank < 2:
             # one duration for both walls unless the walls' own fit the pulses clearly better
-            e1, c1, t1, _ = _refine(obj, kind, order, c0, 0.5 * (tr + tl), 0.5 * (tr + tl),
-                                    False, halfwidth, dl)
+            e1, c1, t1, *_ = _refine(obj, kind, order, c0, 0.5 * (tr + tl), 0.5 * (tr + tl),
+                                     False, halfwidth, dl)
             if e1 <= _TWO_WALLS * e:
                 e, c, tr, tl = e1, c1, t1, t1
-        results.append((e / obj.yy, (PulseModel(c, halfwidth, tr / fs, kind, order),
-                                     PulseModel(c, halfwidth, tl / fs, kind, order))))
+        best = (e, c, tr, tl, (0.0, 0.0), (0.0, 0.0))
+        if rank < _SHAPED or kr or kl:
+            # the contact force's shape: a viscous wall's force jumps at entry, which a
+            # half-sine of another duration and cut-off only imitates (its misfit
+            # lobes are then counted as impacts); kept when it pays for its parameters
+            fams = {shapes[k][0] for k in (kr, kl) if k} or set(_SHAPES)
+            for fam in sorted(fams):
+                hr = shapes[kr][1] if shapes[kr][0] == fam else 0.0
+                hl = shapes[kl][1] if shapes[kl][0] == fam else 0.0
+                start = (c0, tr0, tl0) if (kr or kl) else (c, tr, tl)
+                sep = two and start[1] != start[2]
+                es, cs_, trs, tls, hrs, hls = _refine(obj, kind, order, *start, sep,
+                                                       halfwidth, dl, (fam, hr, hl))
+                # a clearly better fit, not the noise's preference: the shape trades
+                # against duration and cut-off, and moves the contact entry with them
+                if _SHAPE_GAIN * es < min(best[0], e):
+                    sk, ph = _shape_params(fam, np.array([hrs, hls]))
+                    best = (es, cs_, trs, tls, (float(sk[0]), float(sk[1])),
+                            (float(ph[0]), float(ph[1])))
+        e, c, tr, tl, (sr, sl), (pr, pl) = best
+        results.append((e / obj.yy,
+                        (PulseModel(c, halfwidth, tr / fs, kind, order, sr, pr),
+                         PulseModel(c, halfwidth, tl / fs, kind, order, sl, pl))))
     results.sort(key=lambda r: r[0])
     return results
 
@@ -654,9 +805,11 @@ def learn_pulse(a: np.ndarray, fs: float, bad: np.ndarray | None = None, *,
     peaks, Y, sign = peaks[order], Y[order], sign[order]
     obj = _Objective(Y, fs, pre, post, sign)
     results = _unresolved_durations_to_zero(obj, _search(obj, tuple(kinds), fs, int(halfwidth)))
+    results = _mounted(obj, results, fs, int(halfwidth))
     results = _polish_cutoff(obj, results)
     best = results[0][1]
     _, shift, amp = obj.fit(best)
+    error_lag, error_env = _error_envelope(obj, best, shift, amp, sigma)
     entry_shift, spread = _consensus_entry(obj, results, shift, fs)
     # aligned, normalised pulses: times from the contact entry (samples)
     right = sign > 0
@@ -692,7 +845,100 @@ def learn_pulse(a: np.ndarray, fs: float, bad: np.ndarray | None = None, *,
                          template=tmpl, pulses_t=(tj - entry_shift) / fs, pulses=P,
                          candidates=cands,
                          seconds=time.perf_counter() - start, entry_shift=entry_shift / fs,
-                         delay_spread=spread / fs, model_left=best[1])
+                         delay_spread=spread / fs, model_left=best[1], error_lag=error_lag,
+                         error_env=error_env)
+
+
+def _error_envelope(obj: _Objective, models, shift: np.ndarray, amp: np.ndarray,
+                    sigma: float):
+    """Relative residual envelope of the pulses about their peaks (see PulseResponse).
+
+    The residual beyond twice the noise (``sigma``) counts: what noise alone explains
+    is no model error.
+    """
+    lag_all, rel_all = [], []
+    for rows, model in zip(obj.groups, models):
+        if rows.size == 0:
+            continue
+        K = obj.templates(model)                                  # (S, W), projected
+        g = np.clip(np.searchsorted(obj.shifts, shift[rows]), 0, obj.shifts.size - 1)
+        fitted = amp[rows, None] * K[g]
+        peak = np.abs(fitted).max(axis=1, keepdims=True)
+        peak = np.where(peak > 0, peak, 1.0)
+        rel = np.maximum(np.abs(obj.Y[rows] - fitted) - 2.0 * sigma, 0.0) / peak
+        centre = np.argmax(np.abs(fitted), axis=1)
+        lag_all.append(np.arange(obj.Y.shape[1])[None, :] - centre[:, None])
+        rel_all.append(rel)
+    if not lag_all:
+        return np.zeros(0), np.zeros(0)
+    lag, rel = np.concatenate(lag_all).ravel(), np.concatenate(rel_all).ravel()
+    grid = np.arange(lag.min(), lag.max() + 1)
+    env = np.zeros(grid.size)
+    idx = lag - grid[0]
+    for k in range(grid.size):
+        v = rel[idx == k]
+        if v.size >= 4:
+            env[k] = np.quantile(v, 0.9)
+    # running maximum over +/- 2 samples (a lobe's fitted position moves by a sample)
+    pad = np.pad(env, 2)
+    env = np.max(np.stack([pad[i:i + grid.size] for i in range(5)]), axis=0)
+    # a ringing tail outlasts the learning window: extended by the exponential decay
+    # of the envelope's last 12 samples, while it decays, to 1e-4 of the peak
+    tail = env[-12:]
+    if tail.size == 12 and np.all(tail > 0):
+        slope = np.polyfit(np.arange(12.0), np.log(tail), 1)[0]
+        if slope < -0.01:
+            n_ext = int(min(4 * grid.size, max(0.0, math.log(1e-4 / tail[-1]) / slope)))
+            if n_ext > 0:
+                ext = np.arange(1, n_ext + 1)
+                grid = np.concatenate([grid, grid[-1] + ext])
+                env = np.concatenate([env, tail[-1] * np.exp(slope * ext)])
+    return grid.astype(float), env
+
+
+def _mounted(obj: _Objective, results, fs: float, halfwidth: int):
+    """The best causal model with a mounted resonance, where its ringing is in the pulses.
+
+    A stud-mounted accelerometer rings at its mounted resonance (often above the
+    Nyquist frequency: the ringing is then seen aliased) for a few ms after every
+    impact; without it in the model the ringing's lobes are counted as impacts. The
+    resonance's frequency (0.08-3 times the sampling rate) and damping (0.01-0.08)
+    are searched on a grid with the rest of the model fixed, then zoomed in; the
+    resonance is kept when it cuts the misfit by :data:`_SHAPE_GAIN`.
+    """
+    m0, (mr, ml) = results[0]
+    if not mr.causal:
+        return results
+
+    def misfit(F, Z):
+        tot = np.zeros(F.size)
+        for rows, m in zip(obj.groups, (mr, ml)):
+            if rows.size:
+                n = F.size
+                tot += obj.grid(m.kind, m.order, np.array([m.cutoff]), np.full(n, m.tau * fs),
+                                [rows], halfwidth, np.full(n, m.skew), np.full(n, m.phase),
+                                mounts=F, zetas=Z)[0, 0]
+        return tot / obj.yy
+
+    F, Z = (v.ravel() for v in np.meshgrid(np.geomspace(0.08, 3.0, 40),
+                                           [0.01, 0.02, 0.04, 0.08], indexing="ij"))
+    E = misfit(F, Z)
+    k = int(np.argmin(E))
+    f0, z0, e = float(F[k]), float(Z[k]), float(E[k])
+    df, dz = math.log(3.0 / 0.08) / 39, math.log(2.0)
+    for _ in range(6):                                  # zoom in (5 x 5 grids, halved)
+        F, Z = (v.ravel() for v in np.meshgrid(
+            np.clip(f0 * np.exp(np.linspace(-df, df, 5)), *MOUNT_RANGE),
+            np.clip(z0 * np.exp(np.linspace(-dz, dz, 5)), 0.002, 0.5), indexing="ij"))
+        E = misfit(F, Z)
+        k = int(np.argmin(E))
+        if E[k] < e:
+            f0, z0, e = float(F[k]), float(Z[k]), float(E[k])
+        df, dz = df / 2, dz / 2
+    if not _SHAPE_GAIN * e < m0:
+        return results
+    best = (replace(mr, mount=f0, mount_zeta=z0), replace(ml, mount=f0, mount_zeta=z0))
+    return [(e, best)] + [(m, models) for m, models in results if m >= e]
 
 
 def _polish_cutoff(obj: _Objective, results):
@@ -734,7 +980,7 @@ def _unresolved_durations_to_zero(obj: _Objective, results):
     m0, (mr, ml) = results[0]
     if mr.tau == 0.0 and ml.tau == 0.0:
         return results
-    zero = (replace(mr, tau=0.0), replace(ml, tau=0.0))
+    zero = (replace(mr, tau=0.0, skew=0.0, phase=0.0), replace(ml, tau=0.0, skew=0.0, phase=0.0))
     v0 = obj(zero)
     k = 1 if mr.tau == ml.tau else 2
     dof = max(obj.Y.size - 4 * obj.Y.shape[0], 1)
