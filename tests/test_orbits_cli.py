@@ -66,3 +66,33 @@ def test_bad_input_exits_2_with_one_line(tmp_path):
         assert res.exit_code == 2, (args, res.output)
         assert len(res.output.strip().splitlines()) == 1, res.output
     assert not (tmp_path / "a").exists() and not (tmp_path / "b").exists()
+
+
+def test_sweep_overlays_the_continued_branches(tmp_path):
+    """``sweep --overlay-branches``: branches.json beside the diagram; the stable
+    symmetric two-impact branch covers the sweep's 2ipc_sym points."""
+    out = tmp_path / "sw"
+    res = _run(["sweep", "--param", "b", "--from", "0.011", "--to", "0.012", "--n", "3",
+                "--n-jobs", "1", "--duration", "1", "--overlay-branches",
+                "--out", str(out), "--json"])
+    assert res.exit_code == 0, res.output
+    doc = json.loads(res.output)
+    assert str(out / "branches.json") in doc["outputs"]
+    assert (out / "bifurcation.png").stat().st_size > 0
+    saved = json.loads((out / "branches.json").read_text())["branches"]
+    assert len(saved) == len(doc["branches"]) >= 1
+    sym = [b for b in saved if b["kind"] == "2ipc_sym"
+           and any(p["stable"] for p in b["points"])]
+    assert sym, [b["kind"] for b in saved]
+    values = [p["value"] for p in sym[0]["points"] if p["stable"]]
+    assert min(values) <= 0.011 + 1e-6 and max(values) >= 0.012 - 1e-6
+    assert set(doc["labels"]) == {"2ipc_sym"}
+
+
+def test_sweep_overlay_refuses_the_noise_parameter(tmp_path):
+    res = CliRunner().invoke(main, ["sweep", "--param", "noise", "--from", "0.5", "--to", "1",
+                                    "--n", "2", "--overlay-branches", "--out",
+                                    str(tmp_path / "n")])
+    assert res.exit_code == 2 and "noise" in res.output
+    assert len(res.output.strip().splitlines()) == 1
+    assert not (tmp_path / "n").exists()

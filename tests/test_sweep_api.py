@@ -218,7 +218,7 @@ def test_write_sweep_round_trips_through_parquet(b_sweep, tmp_path):
 def test_write_sweep_is_atomic(b_sweep, tmp_path, monkeypatch):
     import vidiscover.sweep as mod
 
-    def broken(df, path=None):
+    def broken(df, path=None, **kw):
         raise RuntimeError("plot failed")
 
     monkeypatch.setattr(mod, "plot_bifurcation", broken)

@@ -394,13 +394,34 @@ def bifurcation_table(df):
 
 
 _LABEL_COLORS = dict(zip(LABELS, ("0.6", "C0", "C2", "C1", "C4", "C3", "k")))
+#: How a swept parameter is drawn: factor applied to its SI value, and its unit.
+_AXIS_UNITS = {"b": (1e3, "mm"), "amplitude": (1e3, "mm"), "frequency": (1.0, "Hz"),
+               "m1": (1.0, "kg"), "m2": (1.0, "kg"), "c1": (1.0, "N s/m"),
+               "k1": (1.0, "N/m"), "theta": (1.0, "deg")}
 
 
-def plot_bifurcation(df, path: str | Path | None = None):
+def axis_scale(param: str) -> tuple[float, str]:
+    """Factor and axis label to draw the swept parameter ``param`` with.
+
+    Lengths are drawn in mm (like every other figure), other parameters in their SI
+    unit; dimensionless ones (r, mu, noise) carry no unit.
+
+    Examples
+    --------
+    >>> axis_scale("b")
+    (1000.0, 'b (mm)')
+    >>> axis_scale("coulomb_friction.mu")
+    (1.0, 'coulomb_friction.mu')
+    """
+    factor, unit = _AXIS_UNITS.get(str(param).rpartition(".")[2], (1.0, ""))
+    return factor, f"{param} ({unit})" if unit else str(param)
+
+
+def plot_bifurcation(df, path: str | Path | None = None, *, branches=None):
     """Bifurcation diagram: Delta t_i / T against the parameter, coloured by label.
 
     The lower panel shows the ground-truth label of every point (and the predicted
-    label, as open markers, when the sweep had a classifier).
+    label, as open markers, when the sweep had a classifier). Lengths are drawn in mm.
 
     Parameters
     ----------
@@ -408,6 +429,9 @@ def plot_bifurcation(df, path: str | Path | None = None):
         A :func:`sweep` result.
     path : str or Path, optional
         PNG to write.
+    branches : list of orbits.Branch or of their ``to_dict()`` documents, optional
+        Continued periodic-orbit branches drawn over the diagram (stable solid,
+        unstable dashed; see :func:`vidiscover.orbits.figures.overlay_branches`).
 
     Returns
     -------
@@ -416,42 +440,51 @@ def plot_bifurcation(df, path: str | Path | None = None):
     from .plotting import figure
 
     param = str(df["param"].iloc[0]) if len(df) else "parameter"
+    scale, xlabel = axis_scale(param)
     long = bifurcation_table(df)
     fig, ax = figure(2, 1, sharex=True, figsize=(9, 6.5), height_ratios=(3, 1.3))
     top, bottom = ax[0, 0], ax[1, 0]
     for label in LABELS:
         sel = long["label"] == label
         if sel.any():
-            top.scatter(long["value"][sel], long["dt_T"][sel], s=2, lw=0,
+            top.scatter(long["value"][sel] * scale, long["dt_T"][sel], s=2, lw=0,
                         color=_LABEL_COLORS[label], label=label, rasterized=True)
+    if branches:
+        from .orbits.figures import overlay_branches
+
+        overlay_branches(top, branches, color="k", scale=scale, label=False)
+        top.plot([], [], "k-", lw=1.2, label="stable orbit")
+        top.plot([], [], "k--", lw=1.2, label="unstable orbit")
     top.set_ylabel(r"$\Delta t_i / T$")
     top.set_title(f"Bifurcation diagram: impact time differences vs {param}")
-    if len(long):
+    if len(long) or branches:
         top.legend(loc="upper right", markerscale=4, fontsize=8, ncol=2)
     ypos = {lab: i for i, lab in enumerate(LABELS)}
     colors = [_LABEL_COLORS[lab] for lab in df["label"]]
-    bottom.scatter(df["value"], [ypos[lab] for lab in df["label"]], s=10, c=colors,
+    bottom.scatter(df["value"] * scale, [ypos[lab] for lab in df["label"]], s=10, c=colors,
                    marker="s", lw=0, label="true")
     if df["label_pred"].notna().any():
         pred = df[df["label_pred"].notna()]
-        bottom.scatter(pred["value"], [ypos.get(lab, -1) + 0.25 for lab in pred["label_pred"]],
+        bottom.scatter(pred["value"] * scale,
+                       [ypos.get(lab, -1) + 0.25 for lab in pred["label_pred"]],
                        s=14, facecolors="none", edgecolors="k", lw=0.6, label="predicted")
         bottom.legend(loc="upper right", fontsize=8)
     bottom.set_yticks(range(len(LABELS)), LABELS, fontsize=8)
     bottom.set_ylim(-0.6, len(LABELS) - 0.4)
-    bottom.set_xlabel(param)
+    bottom.set_xlabel(xlabel)
     bottom.set_ylabel("regime")
     if path is not None:
         fig.savefig(path, dpi=130)
     return fig
 
 
-def write_sweep(df, out_dir: str | Path) -> list[Path]:
+def write_sweep(df, out_dir: str | Path, *, branches=None) -> list[Path]:
     """Write a sweep atomically: tables (Parquet), spec (JSON) and the diagram (PNG).
 
     Files: ``sweep.parquet`` (one row per point, scalar columns), ``bifurcation.parquet``
     (:func:`bifurcation_table`), ``sweep.json`` (spec and label counts) and
-    ``bifurcation.png``. Nothing is written if any step fails.
+    ``bifurcation.png``; with ``branches`` also ``branches.json`` (the continued
+    branches, drawn over the diagram). Nothing is written if any step fails.
 
     Parameters
     ----------
@@ -459,6 +492,8 @@ def write_sweep(df, out_dir: str | Path) -> list[Path]:
         A :func:`sweep` result.
     out_dir : str or Path
         Output directory (created; entries of the same names are replaced).
+    branches : list of orbits.Branch or of their ``to_dict()`` documents, optional
+        Periodic-orbit branches to overlay and save.
 
     Returns
     -------
@@ -472,6 +507,10 @@ def write_sweep(df, out_dir: str | Path) -> list[Path]:
 
     out = Path(out_dir)
     names = ["sweep.parquet", "bifurcation.parquet", "sweep.json", "bifurcation.png"]
+    docs = None
+    if branches is not None:
+        docs = [b if isinstance(b, dict) else b.to_dict() for b in branches]
+        names.append("branches.json")
     points = df.drop(columns=["dt_T"])
     with atomic_directory(out) as tmp:
         pq.write_table(pa.Table.from_pandas(points, preserve_index=False),
@@ -481,5 +520,7 @@ def write_sweep(df, out_dir: str | Path) -> list[Path]:
         write_json(tmp / "sweep.json", {
             "spec": df.attrs.get("sweep", {}), "rows": len(df),
             "labels": {k: int(v) for k, v in df["label"].value_counts().items()}})
-        plot_bifurcation(df, tmp / "bifurcation.png")
+        plot_bifurcation(df, tmp / "bifurcation.png", branches=docs)
+        if docs is not None:
+            write_json(tmp / "branches.json", {"branches": docs})
     return [out / n for n in names]

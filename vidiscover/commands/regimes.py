@@ -187,14 +187,19 @@ def _sweep_values(start: float, stop: float, n: int, log: bool):
                    "shipped regime classifier (column label_pred).")
 @click.option("--model", type=click.Path(dir_okay=False, path_type=Path), default=None,
               help="Regime classifier to predict labels with (implies --classify).")
+@click.option("--overlay-branches", "overlay", is_flag=True,
+              help="Also find the periodic orbits over the range, continue them, and draw "
+                   "the branches over the diagram (stable solid, unstable dashed); writes "
+                   "branches.json. Parameters: b, amplitude, frequency, r, m1, m2, c1, k1, "
+                   "mu, theta, r_left, r_right.")
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path),
               default=Path("sweep-output"), show_default=True,
               help="Output directory: sweep.parquet, bifurcation.parquet, sweep.json, "
-                   "bifurcation.png.")
+                   "bifurcation.png (and branches.json).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document.")
 @handle_errors
 def sweep(param, start, stop, n, log, preset_name, fixed, effect, seed, settle, duration,
-          noise, scheduler, n_jobs, use_model, model, out, as_json):
+          noise, scheduler, n_jobs, use_model, model, overlay, out, as_json):
     """Sweep a parameter: table of regimes and a bifurcation diagram.
 
     Every point is simulated, recorded through the sensor model, analysed from the
@@ -208,6 +213,15 @@ def sweep(param, start, stop, n, log, preset_name, fixed, effect, seed, settle, 
 
     base = _base_params(preset_name, fixed)
     values = _sweep_values(start, stop, n, log)
+    if overlay:
+        from ..effects import Effects
+        from ..orbits.continuation import with_value
+
+        key = param.rpartition(".")[2]
+        if key == "noise":
+            raise InputError("--overlay-branches: the sensor noise does not change the "
+                             "orbits; sweep a physical parameter or drop the flag")
+        with_value(base, Effects.parse(list(effect)), key, float(values[0]))  # checks name
     classify = None
     if model is not None:
         from ..regimes.classifier import load_model
@@ -221,8 +235,16 @@ def sweep(param, start, stop, n, log, preset_name, fixed, effect, seed, settle, 
     df = run_sweep(param, values, base=base, effects=list(effect), seed=seed, settle=settle,
                    duration=duration, noise=noise, scheduler=scheduler, n_jobs=n_jobs,
                    classify=classify, progress=not as_json)
+    branches = None
+    if overlay:
+        from ..orbits.figures import branches_for_sweep
+
+        if not as_json:
+            click.echo("continuing periodic orbits over the range ...", err=True)
+        branches = branches_for_sweep(base, Effects.parse(list(effect)), key,
+                                      float(values[0]), float(values[-1]))
     elapsed = time.perf_counter() - t0
-    files = write_sweep(df, out)
+    files = write_sweep(df, out, branches=branches)
     points = df.drop(columns=["dt_T"])
     rows = points.astype(object).where(points.notna(), None).to_dict(orient="records")
     labels = {k: int(v) for k, v in df["label"].value_counts().items()}
@@ -231,6 +253,13 @@ def sweep(param, start, stop, n, log, preset_name, fixed, effect, seed, settle, 
     counts = ", ".join(f"{k} {v}" for k, v in labels.items())
     human = (f"swept {param} over {len(df)} values from {values[0]:g} to {values[-1]:g} "
              f"in {elapsed:.1f} s\nregimes: {counts}\n")
+    if branches is not None:
+        payload["branches"] = [{"kind": b.kind, "points": len(b.points),
+                                "bifurcations": [x.type for x in b.bifurcations]}
+                               for b in branches]
+        stable = sum(p.stable for b in branches for p in b.points)
+        human += (f"{len(branches)} orbit branches over the range "
+                  f"({stable} of {sum(len(b.points) for b in branches)} points stable)\n")
     if classify is not None:
         agree = float((df["label_pred"] == df["label"]).mean())
         payload["label_agreement"] = agree
