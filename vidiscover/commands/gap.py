@@ -148,12 +148,12 @@ def gap(recording, out, meta, seed, n_jobs, scheduler, no_figures, as_json):
 
 def human_check(doc: dict) -> str:
     """Table of a gap-check run: per case, then accuracy, confusion, shrink."""
-    lines = [f"{'effect':<32}{'mag':<7}{'b mm':>6} {'regime':<10}{'verdict':<32}"
+    lines = [f"{'effect':<32}{'mag':<7}{'b mm':>6} {'regime':<10}{'verdict':<34}"
              f"{'before':>9}{'shrink':>8}{'unexpl':>8}"]
     for c in doc["cases"]:
         mark = "ok" if c["correct"] else "XX"
         lines.append(f"{c['effect']:<32}{c['magnitude']:<7}{1e3 * c['b']:>6.1f} "
-                     f"{c['regime']:<10}{c['predicted']:<30}{mark}{c['gap_before']:>9.1f}"
+                     f"{c['regime']:<10}{c['predicted']:<32}{mark}{c['gap_before']:>9.1f}"
                      f"{100 * c['shrink']:>7.0f}%{100 * c['unexplained']:>7.0f}%")
 
     def pct(v):
@@ -166,11 +166,17 @@ def human_check(doc: dict) -> str:
         f"of {doc['n_none_cases']}",
         f"out-of-catalogue cases with unexplained share >= 50 %: "
         f"{pct(doc['outside_unexplained'])} of {doc['n_outside_cases']}",
-        f"median shrink of the attributed effect: {pct(doc['median_shrink'])}",
+        f"median shrink over all catalogue cases: {pct(doc['median_shrink'])} "
+        f"(over the right attributions only: {pct(doc.get('median_shrink_correct'))})",
         f"time: {doc['time_s']:.1f} s wall, {doc['cpu_s_cases']:.1f} s CPU in cases",
         "confusion (expected -> predicted: count):"]
     for exp, row in doc["confusion"].items():
         lines.append(f"  {exp:<32} " + ", ".join(f"{k}: {v}" for k, v in row.items()))
+    if doc.get("verdicts"):
+        lines.append("targets:")
+        for v in doc["verdicts"]:
+            val = "n/a" if v["value"] is None else f"{v['value']:.3f}"
+            lines.append(f"  {v['verdict']:<7}{v['what']}: {val} (target >= {v['target']:g})")
     return "\n".join(lines)
 
 
