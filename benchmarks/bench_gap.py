@@ -8,6 +8,9 @@ right or wrong (a case where nothing was attributed counts 0); the median over t
 right attributions only is printed beside it. ``--ci`` runs the reduced battery of
 the test suite instead (``CASES_CI``), ``--quick`` the 4-case one. With ``--time``
 it also times one ``diagnose`` on a 5.12 s recording (only on an idle machine).
+``--calibrate`` recomputes the model-form scales
+(:func:`vidiscover.gap.calibration.calibrate`: 16 compliant no-effect recordings to
+calibrate, 16 others to quote the no-effect rate) and prints them.
 
 Targets (issues 6 and 11): top-1 accuracy >= 90 % over >= 40 catalogue cases;
 no-effect cases "no significant gap" in >= 90 %; every out-of-catalogue case with an
@@ -17,6 +20,7 @@ on 2 cores; ``gap-check --quick`` <= 3 min.
 Usage::
 
     python benchmarks/bench_gap.py [--quick | --ci] [--n-jobs 2] [--time] [--json OUT.json]
+    python benchmarks/bench_gap.py --calibrate
 """
 
 from __future__ import annotations
@@ -40,7 +44,21 @@ def main() -> None:
     ap.add_argument("--n-jobs", type=int, default=2)
     ap.add_argument("--time", action="store_true", help="also time one diagnosis")
     ap.add_argument("--json", default=None, help="write the battery result here")
+    ap.add_argument("--calibrate", action="store_true", help="recompute the model-form scales")
     args = ap.parse_args()
+
+    if args.calibrate:
+        from vidiscover.gap.calibration import calibrate
+        from vidiscover.gap.components import FORM_SCALE
+
+        cal = calibrate(n_jobs=args.n_jobs)
+        print("model-form scales:", cal["form_scale"])
+        print("shipped (components.FORM_SCALE):", FORM_SCALE)
+        for key in ("none_calibrate", "none_quote", "none_quote_noise_only"):
+            print(f"{key}: {cal[key]:.3f}")
+        print(f"no-effect (compliant, quote split) >= 0.90: "
+              f"{'MET' if cal['none_quote'] >= 0.9 else 'MISSED'}")
+        return
 
     print(f"load average at start: {os.getloadavg()[0]:.2f}")
     if args.time:

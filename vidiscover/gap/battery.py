@@ -81,6 +81,18 @@ class Case:
         Sensor-noise seed of the "real" recording.
     candidates : tuple of str or None
         Catalogue effects offered to the diagnosis (None: all of them).
+    contact : tuple of str
+        Compliant walls (``--contact`` specs; empty: the exact engine's rigid walls).
+        A compliant case's restitution effects are made by its walls: different
+        Kelvin-Voigt walls for ``asymmetric_restitution``, Hunt-Crossley walls for
+        ``velocity_dependent_restitution``.
+    sensors : tuple of (str, value)
+        :class:`~vidiscover.sensors.SensorConfig` fields (the instrument chain).
+    rig : tuple of (str, value)
+        :class:`~vidiscover.params.SystemParams` fields replacing the paper's (another
+        rig: masses, stiffness, drive).
+    r : float
+        Restitution of the nominal walls (exact engine).
     """
 
     effect: str
@@ -89,19 +101,35 @@ class Case:
     magnitude: str
     seed: int = 0
     candidates: tuple | None = None
+    contact: tuple = ()
+    sensors: tuple = ()
+    rig: tuple = ()
+    r: float = BASE_R
+
+    @property
+    def effects(self) -> tuple:
+        """The withheld catalogue effect(s): one name, two for a two-effect case."""
+        return tuple(self.effect.split("+")) if self.kind == "catalogue" else ()
+
+    @property
+    def engine(self) -> str:
+        """"exact" or "compliant"."""
+        return "compliant" if self.contact else "exact"
 
     @property
     def expected(self) -> str:
-        """The right verdict."""
-        if self.effect in EFFECTS or self.effect == "none":
-            return self.effect
-        return "unexplained"
+        """The right verdict (two effects: both names, sorted, joined by "+")."""
+        if self.kind == "catalogue":
+            return "+".join(sorted(self.effect.split("+")))
+        return "none" if self.kind == "none" else "unexplained"
 
     @property
     def kind(self) -> str:
         """"catalogue", "none" or "outside"."""
-        return ("none" if self.effect == "none" else
-                "catalogue" if self.effect in EFFECTS else "outside")
+        if self.effect == "none":
+            return "none"
+        names = self.effect.split("+")
+        return "catalogue" if all(n in EFFECTS for n in names) else "outside"
 
 
 def battery_cases(quick: bool = False, seed: int = 0) -> list[Case]:
@@ -170,28 +198,43 @@ TARGETS = {
     "none_accuracy": (0.90, "no-effect cases reported as no significant gap"),
     "outside_unexplained": (1.0, "out-of-catalogue cases with unexplained share >= 0.5"),
     "median_shrink": (0.60, "median shrink over all catalogue cases"),
+    "pair_both_named": (0.70, "two-effect cases with both effects named"),
 }
 
 
 def run_case(case: Case) -> dict:
     """Simulate one case, diagnose it (in-process) and score the verdict."""
     from ..params import preset
+    from ..sensors import SensorConfig
     from ..workflows import simulate_to_memory
     from .diagnose import diagnose
 
     t0, c0 = time.perf_counter(), time.process_time()
-    rec, truth, _ = simulate_to_memory(preset("paper", b=case.b, r=BASE_R),
-                                       Effects.parse(list(case.spec)), seed=case.seed,
+    contact = None
+    if case.contact:
+        from ..simulation.contact import ContactModel
+
+        contact = ContactModel.parse(list(case.contact))
+    params = preset("paper", b=case.b, r=case.r)
+    if case.rig:
+        params = params.replace(**dict(case.rig))
+    rec, truth, _ = simulate_to_memory(params, Effects.parse(list(case.spec)), seed=case.seed,
+                                       contact=contact, sensors=SensorConfig(**dict(case.sensors)),
                                        name=f"{case.effect}-{case.magnitude}-{case.b * 1e3:g}mm")
     rep = diagnose(rec, n_jobs=1, candidates=case.candidates)
     d = rep.to_dict()
     top = rep.selected[0] if rep.selected else None
     true_fit = next((c for c in rep.candidates if c.name == case.effect), None)
+    predicted = rep.verdict
+    if len(case.effects) == 2 and rep.confident:
+        predicted = "+".join(sorted(c.name for c in rep.selected))
     return {
         "effect": case.effect, "spec": list(case.spec), "b": case.b,
-        "magnitude": case.magnitude, "kind": case.kind,
+        "magnitude": case.magnitude, "kind": case.kind, "engine": case.engine,
+        "contact": list(case.contact), "sensors": dict(case.sensors), "rig": dict(case.rig),
         "regime": truth.label, "expected": case.expected,
-        "predicted": rep.verdict, "correct": rep.verdict == case.expected,
+        "predicted": predicted, "correct": predicted == case.expected,
+        "named": [c.name for c in rep.selected],
         "gap_before": d["gap_before"], "gap_after": d["gap_after"],
         "shrink": (d["gap_before"] - d["gap_after"]) / d["gap_before"]
         if d["gap_before"] else 0.0,
@@ -215,13 +258,16 @@ def summarise(rows: list[dict]) -> dict:
         confusion[r["expected"]][r["predicted"]] = confusion[r["expected"]].get(
             r["predicted"], 0) + 1
     confusion = {k: v for k, v in confusion.items() if v}
-    cat = [r for r in rows if r["kind"] == "catalogue"]
+    cat = [r for r in rows if r["kind"] == "catalogue" and "+" not in r["effect"]]
+    pairs = [r for r in rows if r["kind"] == "catalogue" and "+" in r["effect"]]
     none = [r for r in rows if r["kind"] == "none"]
     out = [r for r in rows if r["kind"] == "outside"]
-    # shrink over every catalogue case, right or wrong (a miss counts with the
+    # shrink over every single-effect case, right or wrong (a miss counts with the
     # shrink of what was attributed, 0 when nothing was)
     shrink = [r["shrink"] for r in cat]
     shrink_right = [r["shrink"] for r in cat if r["correct"]]
+    # two effects: both named (the selection holds both names, in any order)
+    both = [set(r["effect"].split("+")) <= set(r.get("named", [])) for r in pairs]
 
     def share(sel, key="correct"):
         return float(np.mean([bool(r[key]) for r in sel])) if sel else math.nan
@@ -239,6 +285,14 @@ def summarise(rows: list[dict]) -> dict:
         "median_shrink": float(np.median(shrink)) if shrink else math.nan,
         "median_shrink_correct": float(np.median(shrink_right)) if shrink_right else math.nan,
         "accuracy_all": share(rows),
+        "pair_both_named": float(np.mean(both)) if both else math.nan,
+        "n_pair_cases": len(pairs),
+        "by_engine": {e: {"accuracy": share([r for r in cat if r.get("engine", "exact") == e]),
+                          "n_catalogue_cases": sum(r.get("engine", "exact") == e for r in cat),
+                          "none_accuracy": share([r for r in none
+                                                  if r.get("engine", "exact") == e]),
+                          "n_none_cases": sum(r.get("engine", "exact") == e for r in none)}
+                      for e in ("exact", "compliant")},
         "confusion": confusion,
     }
 

@@ -24,7 +24,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 __all__ = ["STATS", "Signature", "GapComponents", "measure", "compare", "noise_scales",
-           "energy_distance", "mirror", "GROUPS"]
+           "energy_distance", "mirror", "GROUPS", "FORM_SCALE"]
 
 #: Statistic name -> (group, floor of its noise scale, description).
 STATS: dict[str, tuple[str, float, str]] = {}
@@ -42,8 +42,14 @@ for _side in ("right", "left"):
           "drift of r: regression slope on time x half the record length")
     _stat(f"{_side}.dv", f"impacts.{_side}", 0.02, "log of the median LO velocity jump")
     _stat(f"{_side}.rate", f"impacts.{_side}", 0.03, "impacts on this wall per cycle")
-    _stat(f"{_side}.momentum", f"impacts.{_side}", 0.01,
-          "mean momentum residual at this wall (m/s): ball acceleration in the flights")
+# the momentum residual at a wall (m/s: the ball's velocity change in the flights
+# either side of it that the impact does not explain) is compared as the mean of the
+# two walls, which a force along the axis (a tilt) makes, and their half difference,
+# which symmetric wall losses outside the model (compliant contacts) make
+_stat("momentum.common", "flights", 0.01,
+      "mean of the two walls' momentum residuals (m/s): a steady force on the ball")
+_stat("momentum.opposite", "flights", 0.01,
+      "half difference of the right and left momentum residuals (m/s)")
 _stat("flights.direction", "flights", 0.01,
       "mean flight time towards the right minus towards the left (periods)")
 _stat("flights.speed_ratio", "flights", 0.01,
@@ -65,6 +71,19 @@ for _k in range(len(BANDS) - 1):
           f"{BANDS[_k + 1]:g} Hz")
 _stat("timing.returnmap", "timing", 0.01,
       "energy distance between return maps (dt_i, dt_i+1)/T (special: pairwise)")
+
+#: Model-form scale of statistics (same units as the statistic): the spread of the
+#: nominal model's difference from compliant-engine recordings with no catalogue
+#: effect that noise does not explain (:mod:`.calibration`); added in quadrature to
+#: every scale in :func:`compare`. Calibrated on 16 compliant no-effect recordings
+#: (``calibration.none_cases("calibrate", 16)``, :data:`.calibration.FORM_QUANTILE`,
+#: :data:`.calibration.FORM_FACTOR`); reproduce with ``benchmarks/bench_gap.py
+#: --calibrate``.
+FORM_SCALE: dict[str, float] = {
+    "flights.speed_ratio": 0.014, "momentum.common": 0.11, "momentum.opposite": 0.22,
+    "right.dv": 0.35, "left.dv": 0.39, "sensors.pulse_width": 0.25,
+    "sensors.residual_20": 1.4, "sensors.residual_40": 0.87, "sensors.residual_80": 0.3,
+}
 
 #: Component groups in report order.
 GROUPS = ("impacts.right", "impacts.left", "flights", "lo", "timing", "sensors",
@@ -233,6 +252,11 @@ def measure(rec, an=None, *, mass_ratio: float | None = None) -> Signature:
 
     for sgn, name in ((1, "right"), (-1, "left")):
         _wall_stats(name, sgn, table, det, vals, errs, n_cycles, momentum, 0.5 * duration)
+    mr_, ml_ = vals["right.momentum"], vals["left.momentum"]
+    e_m = 0.5 * math.hypot(errs["right.momentum"], errs["left.momentum"])
+    vals["momentum.common"] = 0.5 * (mr_ + ml_)
+    vals["momentum.opposite"] = 0.5 * (mr_ - ml_)
+    errs["momentum.common"] = errs["momentum.opposite"] = e_m
 
     # --- LO response at f and envelope -------------------------------------------
     k_end = int(math.floor(n_cycles)) * T
@@ -385,6 +409,8 @@ def mirror(sig: Signature) -> Signature:
         sgn = -1.0 if src is sig.values else 1.0
         dst["right.momentum"] = sgn * src["left.momentum"]
         dst["left.momentum"] = sgn * src["right.momentum"]
+        dst["momentum.common"] = sgn * src["momentum.common"]
+        dst["momentum.opposite"] = src["momentum.opposite"]
         for k in ("flights.direction", "flights.speed_ratio"):
             dst[k] = sgn * src[k]
     imp = dict(sig.impacts)
@@ -412,7 +438,7 @@ def compare(real: Signature, sim: Signature, rep_var: dict[str, float], *,
             if not np.isfinite(d):
                 per[name], diff[name] = 0.0, math.nan
                 continue
-            s2 = rep_var.get(name, 0.0) + floor ** 2
+            s2 = rep_var.get(name, 0.0) + floor ** 2 + FORM_SCALE.get(name, 0.0) ** 2
             per[name], diff[name] = float(d ** 2 / s2), d
             continue
         a, b = real.values.get(name, math.nan), sim.values.get(name, math.nan)
@@ -420,6 +446,6 @@ def compare(real: Signature, sim: Signature, rep_var: dict[str, float], *,
             per[name], diff[name] = 0.0, math.nan
             continue
         ea = real.errors.get(name, 0.0)
-        s2 = ea ** 2 + rep_var.get(name, 0.0) + floor ** 2
+        s2 = ea ** 2 + rep_var.get(name, 0.0) + floor ** 2 + FORM_SCALE.get(name, 0.0) ** 2
         per[name], diff[name] = float((a - b) ** 2 / s2), float(a - b)
     return GapComponents(per_stat=per, diff=diff)

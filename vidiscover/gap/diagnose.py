@@ -199,7 +199,13 @@ def _clean(v):
 
 
 def _noise_levels(rec, an) -> tuple[float, float, float]:
-    """(x_noise, a_noise, xe_noise) of the recording (robust estimates)."""
+    """(x_noise, a_noise, xe_noise) of the recording (robust estimates).
+
+    The laser and base noise come from third differences (white noise of standard
+    deviation s gives 20 s^2; the motion's third difference is far below the noise at
+    the recording rates), the base one after the fitted harmonics are removed; the
+    accelerometer noise is the detector's.
+    """
     from ..analysis.signals import robust_std
 
     t = np.asarray(rec.t, float)
@@ -210,9 +216,36 @@ def _noise_levels(rec, an) -> tuple[float, float, float]:
     A = np.column_stack(cols)
     xe = np.asarray(rec.xe, float)
     res = xe - A @ np.linalg.lstsq(A, xe, rcond=None)[0]
-    xe_noise = float(robust_std(np.diff(res)) / math.sqrt(2))
+    xe_noise = float(robust_std(np.diff(res, 3)) / math.sqrt(20.0))
+    x = np.asarray(rec.x, float)
+    x_noise = float(robust_std(np.diff(x[np.isfinite(x)], 3)) / math.sqrt(20.0))
     a_noise = float(an.detection.noise)
-    return xe_noise, a_noise, xe_noise
+    return x_noise, a_noise, xe_noise
+
+
+def _instrument(an) -> dict:
+    """The accelerometer chain learned from the recording, as SensorConfig fields.
+
+    The analysis learns the pulse response of the recording
+    (:class:`~vidiscover.analysis.pulse.PulseResponse`): its filter kind, order and
+    cut-off and a mounted resonance are the instrument; its contact duration and
+    shape are the walls' (the ``contact_duration`` candidate's business), so they stay
+    out. Empty when the analysis was given its pulse (nothing learned).
+    """
+    resp = getattr(an.detection, "response", None)
+    if resp is None:
+        return {}
+    m = resp.model
+    fs = float(resp.sample_rate)
+    if m.kind == "linear-phase":
+        out = {"anti_alias": "linear-phase", "cutoff": float(m.cutoff),
+               "kernel_halfwidth": int(m.halfwidth)}
+    else:
+        out = {"anti_alias": m.kind, "aa_order": int(m.order),
+               "aa_cutoff": float(m.cutoff * fs)}
+    if m.mount:
+        out.update(mount_resonance=float(m.mount * fs), mount_zeta=float(m.mount_zeta))
+    return out
 
 
 def build_model(rec, an=None, *, settle: float = 20.0) -> Model:
@@ -242,7 +275,7 @@ def build_model(rec, an=None, *, settle: float = 20.0) -> Model:
     duration = float(rec.t[-1] - rec.t[0]) + rec.dt
     return Model(params=params, phase=float(fc.phase), duration=duration,
                  sample_rate=float(rec.sample_rate), noise=_noise_levels(rec, an),
-                 real=real, settle=settle)
+                 real=real, settle=settle, instrument=_instrument(an))
 
 
 def nominal_model(rec, an=None, *, seed: int = 0) -> tuple[Model, CandidateFit, int]:
