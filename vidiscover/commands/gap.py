@@ -20,17 +20,13 @@ import click
 from ..cli import check_out_dir, emit, handle_errors
 from ..errors import InputError
 
-__all__ = ["gap", "gap_check", "run_gap", "human_gap", "human_check"]
+__all__ = ["gap", "gap_check", "run_gap", "human_gap", "human_check", "param_text"]
 
 
 def _check_jobs(n_jobs: int | None) -> int | None:
     if n_jobs is not None and n_jobs < 1:
         raise InputError(f"--n-jobs must be >= 1 (worker processes), was {n_jobs!r}")
     return n_jobs
-
-
-def _fmt(v) -> str:
-    return f"{v:.4g}" if isinstance(v, float) else str(v)
 
 
 def human_gap(doc: dict) -> str:
@@ -43,12 +39,13 @@ def human_gap(doc: dict) -> str:
         f"{g} {c['before']:.1f}->{c['after']:.1f}" for g, c in comps.items()))
     lines.append("  candidates (validated gap, shrink):")
     for e in doc["effects"]:
-        params = ", ".join(f"{k}={_fmt(v)}" for k, v in e["params"].items())
+        params = param_text(e["params"], e.get("ci"))
         lines.append(f"    {e['name']:<32} {e['gap_after']:>10.1f}  "
                      f"{100 * e['shrink']:>7.1f} %  ({params})")
     if doc["attributed"]:
         lines.append("  attributed: " + ", ".join(
-            f"{a['name']} ({100 * a['share']:.0f} % of the gap)" for a in doc["attributed"]))
+            f"{a['name']} ({100 * a['share']:.0f} % of the gap; "
+            f"{param_text(a['params'], a.get('ci'))})" for a in doc["attributed"]))
     lines.append(f"  unexplained share: {100 * doc['unexplained']:.0f} %  -> verdict: "
                  f"{doc['verdict']}")
     if doc.get("out"):
@@ -66,26 +63,80 @@ def _top_level(files: list[str]) -> list[str]:
     return out
 
 
-def _html(doc: dict, figures: list[str]) -> str:
-    import html
+def _decimals(ci) -> int | None:
+    """Decimals that an interval carries: two significant digits of its half-width."""
+    import math
 
-    rows = "".join(
-        f"<tr><td>{html.escape(e['name'])}</td><td>{e['gap_after']:.2f}</td>"
-        f"<td>{100 * e['shrink']:.1f} %</td><td>{html.escape(str(e['params']))}</td></tr>"
-        for e in doc["effects"])
-    comp = "".join(f"<tr><td>{g}</td><td>{c['before']:.2f}</td><td>{c['after']:.2f}</td></tr>"
-                   for g, c in doc["components"].items())
-    imgs = "".join(f'<p><img src="figures/{f}" alt="{f}"></p>' for f in figures)
-    return (f"<!doctype html><html><head><meta charset='utf-8'><title>gap: "
-            f"{html.escape(doc['recording'])}</title></head><body>"
-            f"<h1>Sim-to-real gap: {html.escape(doc['recording'])}</h1>"
-            f"<p>Gap before {doc['gap_before']:.2f}, after {doc['gap_after']:.2f}; verdict "
-            f"<b>{html.escape(doc['verdict'])}</b>; unexplained share "
-            f"{100 * doc['unexplained']:.0f} %.</p>"
-            f"<h2>Components</h2><table border=1><tr><th>group</th><th>before</th>"
-            f"<th>after</th></tr>{comp}</table>"
-            f"<h2>Candidates</h2><table border=1><tr><th>effect</th><th>gap after</th>"
-            f"<th>shrink</th><th>params</th></tr>{rows}</table>{imgs}</body></html>")
+    if not ci or ci[0] is None or ci[1] is None:
+        return None
+    half = 0.5 * abs(ci[1] - ci[0])
+    if not (math.isfinite(half) and half > 0):
+        return None
+    return max(0, 1 - int(math.floor(math.log10(half))))
+
+
+def param_text(params: dict, cis: dict | None = None) -> str:
+    """``key = value [low, high]`` per fitted parameter, as many digits as it carries.
+
+    A parameter with an interval is printed to two significant digits of the
+    interval's half-width; one without, to 3 significant digits (restitution-law
+    specs as they are).
+    """
+    out = []
+    for k, v in params.items():
+        ci = (cis or {}).get(k)
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            out.append(f"{k} = {v}")
+            continue
+        d = _decimals(ci)
+        if d is None:
+            out.append(f"{k} = {v:.3g}")
+        else:
+            out.append(f"{k} = {v:.{d}f} [{ci[0]:.{d}f}, {ci[1]:.{d}f}]")
+    return "; ".join(out)
+
+
+_CAPTIONS = {
+    "waterfall.png": "Gap components of the nominal model (red, stacked to the total), what "
+                     "each attributed effect removes (green) and what remains (grey), on a "
+                     "linear axis.",
+    "returnmap.png": "Return map of the impact intervals: recording, nominal model and the "
+                     "selected model.",
+    "restitution.png": "Restitution per impact against time, per wall: recording, nominal "
+                       "model and the selected model.",
+}
+
+
+def _html(doc: dict, figures: list[str]) -> str:
+    from ..report.html import _card, _page, _table, esc, fmt
+
+    cards = [_card(fmt(doc["gap_before"], 3), "gap before (noise level ~1)"),
+             _card(fmt(doc["gap_after"], 3), "gap after"),
+             _card(doc["verdict"], "verdict"),
+             _card(f"{100 * doc['unexplained']:.0f} %", "unexplained share")]
+    body = [f"<h1>Sim-to-real gap: {esc(doc['recording'])}</h1>",
+            f'<div class="cards">{"".join(cards)}</div>',
+            f"<p>Significance threshold {fmt(doc['threshold'], 3)}: the gap is "
+            f"{'significant' if doc['significant'] else 'not significant'}.</p>"]
+    if doc["attributed"]:
+        body.append("<h2>Attributed</h2>")
+        body.append(_table(["effect", "share of the gap", "parameters [95 % interval]"],
+                           [[a["name"], f"{100 * a['share']:.0f} %",
+                             param_text(a["params"], a.get("ci"))]
+                            for a in doc["attributed"]]))
+    body.append("<h2>Components</h2>")
+    body.append(_table(["group", "before", "after"],
+                       [[g, fmt(c["before"], 3), fmt(c["after"], 3)]
+                        for g, c in doc["components"].items()]))
+    body.append("<h2>Candidates</h2>")
+    body.append(_table(["effect", "gap after", "shrink", "parameters"],
+                       [[e["name"], fmt(e["gap_after"], 3), f"{100 * e['shrink']:.1f} %",
+                         param_text(e["params"], e.get("ci"))] for e in doc["effects"]]))
+    for f in figures:
+        cap = _CAPTIONS.get(f, "")
+        body.append(f'<figure><img src="figures/{esc(f)}" alt="{esc(f)}">'
+                    f"<figcaption>{esc(cap)}</figcaption></figure>")
+    return _page(f"gap: {doc['recording']}", "".join(body))
 
 
 def run_gap(path: Path, out: Path, *, meta: Path | None = None, seed: int = 0,

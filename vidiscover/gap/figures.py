@@ -25,6 +25,9 @@ def plot_waterfall(report, ax=None):
 
     Bars: one per component group (before), stacked to the total; then one bar per
     selected effect (negative, the gap it removed); the last bar is what remains.
+    The axis is linear (a log axis makes a small component look as big as a large
+    one); every bar is labelled with its value, so components too small to see are
+    still read.
     """
     import matplotlib.pyplot as plt
 
@@ -54,9 +57,12 @@ def plot_waterfall(report, ax=None):
     colors.append("tab:gray")
     x = np.arange(len(labels))
     ax.bar(x, heights, bottom=bottoms, color=colors)
+    top = max(report.gap_before, 1e-9)
+    for xi, b0, h in zip(x, bottoms, heights):
+        ax.text(xi, b0 + h + 0.01 * top, f"{h:.3g}", ha="center", va="bottom", fontsize=7)
     ax.set_xticks(x, labels, rotation=40, ha="right", fontsize=8)
     ax.set_ylabel("gap (sum of normalised squared differences)")
-    ax.set_yscale("symlog", linthresh=10.0)
+    ax.set_ylim(0, 1.1 * top)
     ax.axhline(report.gap_before, color="k", lw=0.5, ls=":")
     ax.set_title(f"{report.name}: gap {report.gap_before:.3g} -> {report.gap_after:.3g} "
                  f"({report.verdict})", fontsize=9)
