@@ -36,8 +36,8 @@ from ..effects import EFFECTS, Effects
 from ..errors import InputError
 from .diagnose import _clean
 
-__all__ = ["Case", "CASES_FULL", "CASES_QUICK", "CASES_CI", "TARGETS", "battery_cases",
-           "run_case", "gap_check", "summarise", "verdicts"]
+__all__ = ["Case", "CASES_FULL", "CASES_QUICK", "CASES_CI", "CASES_EXTRA", "extra_cases",
+           "TARGETS", "battery_cases", "run_case", "gap_check", "summarise", "verdicts"]
 
 #: Restitution of both walls in the simulated "real" recordings (unless an effect sets it).
 BASE_R = 0.7
@@ -136,7 +136,11 @@ def battery_cases(quick: bool = False, seed: int = 0) -> list[Case]:
     """The case list, full or quick.
 
     Full: every catalogue effect x 2 magnitudes x 3 clearances, 2 no-effect and 2
-    out-of-catalogue cases per clearance; quick: a 4-case subset at b = 9 mm.
+    out-of-catalogue cases per clearance (exact engine, paper rig), then
+    :func:`extra_cases` (compliant walls, another rig, two effects at once); quick:
+    a 6-case subset at b = 9 mm (exact: no effect, asymmetric restitution,
+    inclination, restitution drift; compliant: no effect; two effects:
+    asymmetric restitution and friction).
     """
     if quick:
         b = 0.009
@@ -144,7 +148,11 @@ def battery_cases(quick: bool = False, seed: int = 0) -> list[Case]:
                 Case("asymmetric_restitution", (MAGNITUDES["asymmetric_restitution"][1],),
                      b, "large", seed + 1),
                 Case("inclination", (MAGNITUDES["inclination"][1],), b, "large", seed + 2),
-                Case("restitution_drift", (DRIFT[1],), b, "large", seed + 3)]
+                Case("restitution_drift", (DRIFT[1],), b, "large", seed + 3),
+                Case("none", (), b, "-", seed + 4, contact=(KV,), sensors=BUTTER),
+                Case("asymmetric_restitution+coulomb_friction",
+                     ("asymmetric_restitution=0.85,0.5", "coulomb_friction=0.15"), b, "large",
+                     seed + 5)]
     cases = []
     k = seed
     for b in CLEARANCES:
@@ -158,11 +166,8 @@ def battery_cases(quick: bool = False, seed: int = 0) -> list[Case]:
         for mag, spec in zip(("small", "large"), DRIFT):
             cases.append(Case("restitution_drift", (spec,), b, mag, k))
             k += 1
-    return cases
+    return cases + extra_cases(seed)
 
-
-CASES_QUICK = battery_cases(quick=True)
-CASES_FULL = battery_cases(quick=False)
 
 #: The reduced battery of the test suite (``tests/test_gap_battery.py``): every
 #: catalogue effect once, spread over the three clearances and both magnitudes,
@@ -192,6 +197,73 @@ CASES_CI = (
        Case("none", (), 0.015, "-", 521, _CI_OTHER),
        Case("restitution_drift", (DRIFT[0],), 0.009, "small", 522, _CI_OTHER)])
 
+#: Compliant walls and instruments of the realism issue: Kelvin-Voigt walls (k 3e7 N/m),
+#: a 4th-order Butterworth at 2500 Hz, laser noise 2 um (like the independent set).
+KV = "kelvin-voigt:k=3e7,r=0.75"
+BUTTER = (("anti_alias", "butter"), ("aa_order", 4), ("aa_cutoff", 2500.0), ("x_noise", 2e-6))
+BESSEL = (("anti_alias", "bessel"), ("aa_order", 4), ("aa_cutoff", 2560.0))
+ASYM_WALLS = ("right=kelvin-voigt:k=3e7,r=0.9", "left=kelvin-voigt:k=3e7,r=0.5")
+#: Another rig (like the independent P07: 3 kg, 15 kN/m, driven at 10 Hz, 8192 Hz).
+OTHER_RIG = (("m1", 3.0), ("k1", 15000.0), ("c1", 2.0), ("frequency", 10.0))
+FS_8192 = (("sample_rate", 8192.0),)
+
+
+def extra_cases(seed: int = 0) -> list[Case]:
+    """Compliant-engine, other-rig and two-effect cases (issue 11), added to the full list.
+
+    Compliant walls make the restitution effects themselves (different Kelvin-Voigt
+    walls: asymmetric restitution; Hunt-Crossley walls: speed-dependent
+    restitution); ``contact_duration`` has no compliant case (the contact law sets
+    it).
+    """
+    k = 300 + seed
+    out = []
+
+    def add(effect, spec, b, mag="-", **kw):
+        nonlocal k
+        out.append(Case(effect, tuple(spec), b, mag, k, **kw))
+        k += 1
+
+    # compliant walls, paper rig
+    add("none", (), 0.009, contact=(KV,), sensors=BUTTER)
+    add("none", (), 0.012, contact=(KV,), sensors=BESSEL)
+    add("none", (), 0.006, contact=("kelvin-voigt:k=6e7,r=0.65",))
+    add("asymmetric_restitution", (), 0.010, "large", contact=ASYM_WALLS, sensors=BUTTER)
+    add("velocity_dependent_restitution", (), 0.011, "large",
+        contact=("right=hunt-crossley:k=1e9,alpha=0.25",
+                 "left=hunt-crossley:k=1e9,alpha=0.6"), sensors=BUTTER)
+    add("coulomb_friction", ("coulomb_friction=0.12",), 0.013, "small", contact=(KV,),
+        sensors=BUTTER)
+    add("inclination", ("inclination=2.5",), 0.010, "small", contact=(KV,), sensors=BUTTER)
+    add("excitation_distortion", ("excitation_distortion=0.04,0.5",), 0.009, "small",
+        contact=(KV,), sensors=BUTTER)
+    add("sensor_resonance", ("sensor_resonance=250,0.05",), 0.009, "small", contact=(KV,),
+        sensors=BUTTER)
+    add("clearance_error", ("clearance_error=0.0008",), 0.012, "large", contact=(KV,),
+        sensors=BUTTER)
+    # another rig, both engines
+    add("none", (), 0.009, rig=OTHER_RIG, sensors=FS_8192)
+    add("inclination", ("inclination=3",), 0.009, "large", rig=OTHER_RIG, sensors=FS_8192)
+    add("none", (), 0.009, rig=OTHER_RIG, contact=(KV,), sensors=FS_8192)
+    add("asymmetric_restitution", (), 0.009, "large", rig=OTHER_RIG, contact=ASYM_WALLS,
+        sensors=FS_8192)
+    # two effects at once
+    for b in (0.009, 0.012):
+        add("asymmetric_restitution+coulomb_friction",
+            ("asymmetric_restitution=0.85,0.5", "coulomb_friction=0.15"), b, "large")
+        add("asymmetric_restitution+inclination",
+            ("asymmetric_restitution=0.85,0.5", "inclination=3"), b, "large")
+    add("asymmetric_restitution+coulomb_friction", ("coulomb_friction=0.12",), 0.010, "large",
+        contact=ASYM_WALLS, sensors=BUTTER)
+    add("asymmetric_restitution+inclination", ("inclination=2.5",), 0.010, "large",
+        contact=ASYM_WALLS, sensors=BUTTER)
+    return out
+
+
+CASES_EXTRA = extra_cases()
+CASES_QUICK = battery_cases(quick=True)
+CASES_FULL = battery_cases(quick=False)
+
 #: The battery's targets (issues 6 and 11): summary key -> (threshold, text).
 TARGETS = {
     "accuracy": (0.90, "top-1 attribution over catalogue cases"),
@@ -199,6 +271,7 @@ TARGETS = {
     "outside_unexplained": (1.0, "out-of-catalogue cases with unexplained share >= 0.5"),
     "median_shrink": (0.60, "median shrink over all catalogue cases"),
     "pair_both_named": (0.70, "two-effect cases with both effects named"),
+    "ci_coverage": (0.80, "true parameters inside the nominal 95 % intervals"),
 }
 
 
@@ -226,6 +299,19 @@ def run_case(case: Case) -> dict:
     top = rep.selected[0] if rep.selected else None
     true_fit = next((c for c in rep.candidates if c.name == case.effect), None)
     predicted = rep.verdict
+    truth_fx = Effects.parse(list(case.spec)).to_dict()
+    coverage = []
+    for a in d["attributed"]:
+        true = truth_fx.get(a["name"], {})
+        for key, value in true.items():
+            # a phase of a harmonic that is not there has no true value
+            if key.startswith("phi") and true.get("h" + key[3:], 1.0) == 0:
+                continue
+            if isinstance(value, (int, float)) and not isinstance(value, bool):
+                ci = (a.get("ci") or {}).get(key)
+                coverage.append({"effect": a["name"], "param": key, "true": float(value),
+                                 "ci": ci, "covered": bool(ci is not None
+                                                           and ci[0] <= value <= ci[1])})
     if len(case.effects) == 2 and rep.confident:
         predicted = "+".join(sorted(c.name for c in rep.selected))
     return {
@@ -235,6 +321,7 @@ def run_case(case: Case) -> dict:
         "regime": truth.label, "expected": case.expected,
         "predicted": predicted, "correct": predicted == case.expected,
         "named": [c.name for c in rep.selected],
+        "coverage": coverage,
         "gap_before": d["gap_before"], "gap_after": d["gap_after"],
         "shrink": (d["gap_before"] - d["gap_after"]) / d["gap_before"]
         if d["gap_before"] else 0.0,
@@ -268,6 +355,9 @@ def summarise(rows: list[dict]) -> dict:
     shrink_right = [r["shrink"] for r in cat if r["correct"]]
     # two effects: both named (the selection holds both names, in any order)
     both = [set(r["effect"].split("+")) <= set(r.get("named", [])) for r in pairs]
+    # interval coverage: every true numeric parameter of a named effect (an interval
+    # that could not be determined counts as not covering)
+    cov = [c["covered"] for r in rows for c in r.get("coverage", [])]
 
     def share(sel, key="correct"):
         return float(np.mean([bool(r[key]) for r in sel])) if sel else math.nan
@@ -286,6 +376,8 @@ def summarise(rows: list[dict]) -> dict:
         "median_shrink_correct": float(np.median(shrink_right)) if shrink_right else math.nan,
         "accuracy_all": share(rows),
         "pair_both_named": float(np.mean(both)) if both else math.nan,
+        "ci_coverage": float(np.mean(cov)) if cov else math.nan,
+        "n_ci_params": len(cov),
         "n_pair_cases": len(pairs),
         "by_engine": {e: {"accuracy": share([r for r in cat if r.get("engine", "exact") == e]),
                           "n_catalogue_cases": sum(r.get("engine", "exact") == e for r in cat),

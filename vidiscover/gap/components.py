@@ -40,12 +40,17 @@ for _side in ("right", "left"):
           "slope of r against impact speed (s/m)")
     _stat(f"{_side}.r_trend", f"impacts.{_side}", 0.005,
           "drift of r: regression slope on time x half the record length")
-    _stat(f"{_side}.dv", f"impacts.{_side}", 0.02, "log of the median LO velocity jump")
     _stat(f"{_side}.rate", f"impacts.{_side}", 0.03, "impacts on this wall per cycle")
 # the momentum residual at a wall (m/s: the ball's velocity change in the flights
 # either side of it that the impact does not explain) is compared as the mean of the
 # two walls, which a force along the axis (a tilt) makes, and their half difference,
 # which symmetric wall losses outside the model (compliant contacts) make
+# likewise the LO velocity jumps: their common level (which symmetric contact
+# compliance and the instrument's gain shift) and their right-left difference
+_stat("dv.common", "impacts.walls", 0.02,
+      "mean over the walls of the log median LO velocity jump")
+_stat("dv.opposite", "impacts.walls", 0.02,
+      "half difference right - left of the log median LO velocity jumps")
 _stat("momentum.common", "flights", 0.01,
       "mean of the two walls' momentum residuals (m/s): a steady force on the ball")
 _stat("momentum.opposite", "flights", 0.01,
@@ -80,13 +85,13 @@ _stat("timing.returnmap", "timing", 0.01,
 #: :data:`.calibration.FORM_FACTOR`); reproduce with ``benchmarks/bench_gap.py
 #: --calibrate``.
 FORM_SCALE: dict[str, float] = {
-    "flights.speed_ratio": 0.014, "momentum.common": 0.11, "momentum.opposite": 0.22,
-    "right.dv": 0.35, "left.dv": 0.39, "sensors.pulse_width": 0.25,
+    "dv.common": 0.26, "dv.opposite": 0.2, "flights.speed_ratio": 0.014,
+    "momentum.common": 0.11, "momentum.opposite": 0.22, "sensors.pulse_width": 0.25,
     "sensors.residual_20": 1.4, "sensors.residual_40": 0.87, "sensors.residual_80": 0.3,
 }
 
 #: Component groups in report order.
-GROUPS = ("impacts.right", "impacts.left", "flights", "lo", "timing", "sensors",
+GROUPS = ("impacts.right", "impacts.left", "impacts.walls", "flights", "lo", "timing", "sensors",
           "excitation")
 
 
@@ -257,6 +262,11 @@ def measure(rec, an=None, *, mass_ratio: float | None = None) -> Signature:
     vals["momentum.common"] = 0.5 * (mr_ + ml_)
     vals["momentum.opposite"] = 0.5 * (mr_ - ml_)
     errs["momentum.common"] = errs["momentum.opposite"] = e_m
+    dr_, dl_ = vals["right.dv"], vals["left.dv"]
+    vals["dv.common"] = 0.5 * (dr_ + dl_)
+    vals["dv.opposite"] = 0.5 * (dr_ - dl_)
+    errs["dv.common"] = errs["dv.opposite"] = 0.5 * math.hypot(errs["right.dv"],
+                                                              errs["left.dv"])
 
     # --- LO response at f and envelope -------------------------------------------
     k_end = int(math.floor(n_cycles)) * T
@@ -411,6 +421,8 @@ def mirror(sig: Signature) -> Signature:
         dst["left.momentum"] = sgn * src["right.momentum"]
         dst["momentum.common"] = sgn * src["momentum.common"]
         dst["momentum.opposite"] = src["momentum.opposite"]
+        dst["dv.common"] = src["dv.common"]
+        dst["dv.opposite"] = sgn * src["dv.opposite"]
         for k in ("flights.direction", "flights.speed_ratio"):
             dst[k] = sgn * src[k]
     imp = dict(sig.impacts)

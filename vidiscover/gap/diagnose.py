@@ -10,6 +10,7 @@ significant gap, tries a second effect on top of it (forward selection).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -67,8 +68,9 @@ class GapReport:
     candidates : list of CandidateFit
         Every fitted catalogue effect, best (lowest penalised score) first.
     selected : list of CandidateFit
-        The forward-selected model(s): one effect, or two (the second on top of
-        the first); empty when the gap is not significant.
+        The selected model: one effect, or two fitted jointly (:func:`_best_pair`;
+        the last entry carries the pair's gap and effects); empty when the gap is
+        not significant.
     significant : bool
         ``gap_before`` exceeds :data:`SIGNIFICANT_GAP`.
     n_sims : int
@@ -128,16 +130,30 @@ class GapReport:
         return self.selected[0].name
 
     def attributed(self) -> list[dict]:
-        """Selected effects with the share of the nominal gap each removed."""
-        out, prev = [], self.gap_before
-        for c in self.selected:
-            out.append({"name": c.name, "params": _clean(c.params),
-                        "ci": _clean(self.cis.get(c.name)),
-                        "share": _clean(max(0.0, prev - c.gap.total) / max(self.gap_before,
-                                                                           1e-12)),
-                        "confident": self.confident})
-            prev = c.gap.total
-        return out
+        """Selected effects with the share of the nominal gap each removed.
+
+        One effect: the share it removed. A jointly fitted pair: each effect's
+        Shapley share, the mean of what it removes alone and what it removes on top
+        of the other, ``((G0 - G_a) + (G_b - G_ab)) / 2 / G0`` (``G_a``: the gap of
+        ``a`` fitted alone), so the shares add up to the pair's and do not depend on
+        the order.
+        """
+        g0 = max(self.gap_before, 1e-12)
+        shares = {}
+        if len(self.selected) == 2:
+            single = {c.name: c.gap.total for c in self.candidates}
+            a, b = (c.name for c in self.selected)
+            g_ab = self.gap_after
+            g_a, g_b = single.get(a, g_ab), single.get(b, g_ab)
+            shares[a] = 0.5 * ((self.gap_before - g_a) + (g_b - g_ab)) / g0
+            shares[b] = 0.5 * ((self.gap_before - g_b) + (g_a - g_ab)) / g0
+        else:
+            for c in self.selected:
+                shares[c.name] = (self.gap_before - c.gap.total) / g0
+        return [{"name": c.name, "params": _clean(c.params),
+                 "ci": _clean(self.cis.get(c.name)),
+                 "share": _clean(max(0.0, shares[c.name])),
+                 "confident": self.confident} for c in self.selected]
 
     def to_dict(self) -> dict:
         """JSON-ready dict.
@@ -295,8 +311,6 @@ def nominal_model(rec, an=None, *, seed: int = 0) -> tuple[Model, CandidateFit, 
         The nominal model scored on the validation draw (``gap_before``).
     n_sims : int
     """
-    import dataclasses
-
     model = build_model(rec, an)
     fx0 = Effects()
     scan = [simulate_signature(model, fx0, ball_speed=v, noise_seed=seed) for v in BALL_SPEEDS]
@@ -335,20 +349,87 @@ def _parsimonious(fits: list[CandidateFit]) -> list[CandidateFit]:
     return fits
 
 
+#: Single effects whose pairs are fitted jointly when the best one leaves a
+#: significant gap (the best and the next ones that removed something on their own).
+PAIR_POOL = 3
+
+
+def _pair_item(item):
+    """Top-level worker: one pair of effects fitted jointly.
+
+    Effect ``b`` is fitted on top of ``a``'s fit, then ``a`` is refitted on top of
+    ``b``'s (block-coordinate descent: neither stays frozen); the better of the two.
+    """
+    model, fa, b = item
+    step1 = fit_candidate(model, b, fa.effects, fa.r)
+    if step1 is None:
+        return None
+    base = Effects().with_effect(b, **step1.effects.active[b])
+    step2 = fit_candidate(model, fa.name, base, step1.r)
+    n = step1.n_sims + (step2.n_sims if step2 is not None else 0)
+    cands = [c for c in (step1, step2) if c is not None]
+    joint = min(cands, key=lambda c: c.gap.total)
+    n_b = step1.n_params
+    return dataclasses.replace(joint, name=f"{fa.name}+{b}", n_params=fa.n_params + n_b,
+                               params={fa.name: dict(joint.effects.active[fa.name]),
+                                       b: dict(joint.effects.active[b])}, n_sims=n)
+
+
+def _best_pair(model, nominal, fits, n_jobs, scheduler, max_params=None):
+    """The best jointly fitted pair among the :data:`PAIR_POOL` best single effects.
+
+    ``max_params``: only pairs with at most this many parameters.
+    """
+    useful = [f for f in fits
+              if f.gap.total < nominal.gap.total - max(PENALTY, 0.05 * nominal.gap.total)]
+    pool = useful[:PAIR_POOL]
+    if fits[0] not in pool:
+        pool = [fits[0]] + pool[:PAIR_POOL - 1]
+    if max_params is not None:
+        pool = [f for f in useful if f.n_params < max_params][:PAIR_POOL]
+    items = [(model, a, b.name) for i, a in enumerate(pool) for b in pool[i + 1:]
+             if {a.name, b.name} not in ({"asymmetric_restitution",
+                                          "velocity_dependent_restitution"},)
+             and (max_params is None or a.n_params + b.n_params <= max_params)]
+    if not items:
+        return None, 0
+    pairs = [p for p in _map(items, n_jobs, scheduler, worker=_pair_item) if p is not None]
+    n = sum(p.n_sims for p in pairs)
+    return (min(pairs, key=lambda c: c.score) if pairs else None), n
+
+
+def _split_pair(pair: CandidateFit, fits: list) -> list:
+    """A jointly fitted pair as two selected entries (each with its fitted parameters).
+
+    The first carries the better single effect's own validated gap, the second the
+    pair's; :meth:`GapReport.attributed` shares the removed gap between them.
+    """
+    a, b = pair.name.split("+")
+    single = {f.name: f for f in fits}
+    fa, fb = single.get(a), single.get(b)
+    if fa is not None and fb is not None and fb.gap.total < fa.gap.total:
+        a, b, fa, fb = b, a, fb, fa
+    first = dataclasses.replace(pair, name=a, params=pair.params[a],
+                                gap=fa.gap if fa is not None else pair.gap,
+                                n_params=fa.n_params if fa is not None else 0)
+    second = dataclasses.replace(pair, name=b, params=pair.params[b],
+                                 n_params=pair.n_params)
+    return [first, second]
+
+
 def _fit_item(item):
     """Top-level worker for :func:`vidiscover.scale.parallel_map`."""
     model, name, base, base_r = item
     return fit_candidate(model, name, base, base_r)
 
 
-def _map(items, n_jobs, scheduler):
+def _map(items, n_jobs, scheduler, worker=None):
+    worker = _fit_item if worker is None else worker
     if n_jobs == 1 and scheduler is None:
-        return [_fit_item(i) for i in items]
-    try:
-        from ..scale import parallel_map
-    except ImportError:  # pragma: no cover - scale is part of the package
-        return [_fit_item(i) for i in items]
-    return parallel_map(_fit_item, items, n_jobs=n_jobs, scheduler=scheduler, progress=False)
+        return [worker(i) for i in items]
+    from ..scale import parallel_map
+
+    return parallel_map(worker, items, n_jobs=n_jobs, scheduler=scheduler, progress=False)
 
 
 def diagnose(rec, *, seed: int = 0, n_jobs: int | None = None, scheduler=None,
@@ -398,20 +479,17 @@ def diagnose(rec, *, seed: int = 0, n_jobs: int | None = None, scheduler=None,
     if significant and fits and fits[0].score < nominal.score:
         best = fits[0]
         selected.append(best)
-        if best.gap.total > SIGNIFICANT_GAP:
-            # forward selection over the effects that removed something on their own
-            rest = [f.name for f in fits[1:]
-                    if f.gap.total < nominal.gap.total - max(PENALTY, 0.05 * nominal.gap.total)]
-            seconds = [f for f in _map([(model, n, best.effects, best.r) for n in rest],
-                                       n_jobs, scheduler) if f is not None]
-            n_sims += sum(f.n_sims for f in seconds)
-            seconds.sort(key=lambda c: c.score)
-            if seconds:
-                s = seconds[0]
-                removed = best.score - s.score
-                if removed > SECOND_EFFECT_SHARE * (best.gap.total - NULL_GAP) and \
-                        removed > PENALTY:
-                    selected.append(s)
+        left = best.gap.total > SIGNIFICANT_GAP
+        if left or best.n_params >= 3:
+            # a significant gap left: pairs of any size; otherwise a rich single
+            # effect (a law per wall) is checked against pairs no richer than itself
+            pair, n = _best_pair(model, nominal, fits, n_jobs, scheduler,
+                                 max_params=None if left else best.n_params)
+            n_sims += n
+            removed = best.score - pair.score if pair is not None else -math.inf
+            if (left and removed > SECOND_EFFECT_SHARE * (best.gap.total - NULL_GAP)
+                    and removed > PENALTY) or (not left and removed > 0):
+                selected = _split_pair(pair, fits)
     cis = {}
     for c in selected:
         cis[c.name] = profile_ci(model, c)

@@ -244,7 +244,8 @@ class _Objective:
 
     def __init__(self, model: Model, make_effects, r0: float, tol: float = 0.004) -> None:
         self.model, self.make, self.bias, self.tol = model, make_effects, 0.0, tol
-        self.r0 = r0
+        # no measured r (no impact on which it is defined): the model's own r
+        self.r0 = float(r0) if np.isfinite(r0) else float(model.params.r)
         self.n_sims = 0
         self.cache: dict[float, tuple[float, float]] = {}
 
