@@ -138,9 +138,9 @@ def battery_cases(quick: bool = False, seed: int = 0) -> list[Case]:
     Full: every catalogue effect x 2 magnitudes x 3 clearances, 2 no-effect and 2
     out-of-catalogue cases per clearance (exact engine, paper rig), then
     :func:`extra_cases` (compliant walls, another rig, two effects at once); quick:
-    a 6-case subset at b = 9 mm (exact: no effect, asymmetric restitution,
-    inclination, restitution drift; compliant: no effect; two effects:
-    asymmetric restitution and friction).
+    a 6-case subset at b = 9-10 mm (exact: no effect, asymmetric restitution,
+    inclination, restitution drift; compliant: no effect, and asymmetric walls with
+    friction).
     """
     if quick:
         b = 0.009
@@ -150,9 +150,8 @@ def battery_cases(quick: bool = False, seed: int = 0) -> list[Case]:
                 Case("inclination", (MAGNITUDES["inclination"][1],), b, "large", seed + 2),
                 Case("restitution_drift", (DRIFT[1],), b, "large", seed + 3),
                 Case("none", (), b, "-", seed + 4, contact=(KV,), sensors=BUTTER),
-                Case("asymmetric_restitution+coulomb_friction",
-                     ("asymmetric_restitution=0.85,0.5", "coulomb_friction=0.15"), b, "large",
-                     seed + 5)]
+                Case("asymmetric_restitution+coulomb_friction", ("coulomb_friction=0.12",),
+                     0.010, "large", seed + 5, contact=ASYM_WALLS, sensors=BUTTER)]
     cases = []
     k = seed
     for b in CLEARANCES:

@@ -532,7 +532,10 @@ def profile_ci(model: Model, fit: CandidateFit, level_delta: float = 3.84,
     a chi-square: each parameter is stepped by +/- ``rel_step`` of its value (or of
     its validity range when the value is ~0), the curvature of the gap gives the
     half-width where it rises by ``level_delta`` (3.84: 95 %, one parameter, the
-    others held). String parameters (restitution-law specs) get no interval.
+    effect's other parameters held). When the effects do not set the restitution,
+    the model's one constant r is re-fitted at every step (a profile over that
+    nuisance parameter: friction and tilt trade against r). String parameters
+    (restitution-law specs) get no interval.
 
     Returns
     -------
@@ -543,7 +546,12 @@ def profile_ci(model: Model, fit: CandidateFit, level_delta: float = 3.84,
 
     spec = EFFECTS[fit.name]
     base = fit.effects.without(fit.name)
-    g0 = gap_of(model, simulate_signature(model, fit.effects, fit.r), fit.effects).total
+    def gap_at(fx: Effects) -> float:
+        if _sets_r(fx) or not np.isfinite(model.real.r_pooled):
+            return gap_of(model, simulate_signature(model, fx, fit.r), fx).total
+        return _Objective(model, lambda _: fx, fit.r)(0.0)    # r profiled out
+
+    g0 = gap_at(fit.effects)
     out: dict = {}
     for key, value in fit.params.items():
         if not isinstance(value, (int, float)) or isinstance(value, bool):
@@ -559,7 +567,7 @@ def profile_ci(model: Model, fit: CandidateFit, level_delta: float = 3.84,
             except Exception:  # outside the validity range: one-sided
                 gs.append(None)
                 continue
-            gs.append(gap_of(model, simulate_signature(model, fx, fit.r), fx).total)
+            gs.append(gap_at(fx))
         if None in gs:
             g = [x for x in gs if x is not None]
             a = (g[0] - g0) / h ** 2 if g else 0.0

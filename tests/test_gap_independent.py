@@ -1,0 +1,50 @@
+"""Gap verdicts on the independent simulator's recordings (``gap_truth.json``).
+
+Compliant walls, causal anti-alias filters and noise on every channel, made by code
+that shares nothing with vidiscover. Achieved (and tested here): P08 (no effect) ->
+``none``, P09 (2.5 deg tilt) -> ``inclination``, P10 (walls 0.9 / 0.5) ->
+``asymmetric_restitution``. Not achieved: P03 (friction 0.12) and P02
+(Hunt-Crossley walls) come out ``none``: their gap (1.3 and 2.9) lies within the
+model-form spread calibrated on compliant no-effect recordings, although friction
+is the best candidate on P03.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+import pytest
+from independent import GAP_TRUTH, load
+
+from vidiscover.gap import diagnose
+
+ACHIEVED = ("P08_gap_none", "P09_gap_tilt", "P10_gap_asym")
+
+
+@functools.cache
+def report(name: str):
+    rec, key = load(name)
+    return diagnose(rec, n_jobs=1), key
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("name", ACHIEVED)
+def test_gap_verdict_matches_the_truth(name):
+    rep, key = report(name)
+    assert rep.verdict == (GAP_TRUTH[name] or "none")
+    if GAP_TRUTH[name] is None:
+        assert not rep.significant and rep.gap_before < 2.0          # measured 0.6
+        return
+    assert rep.unexplained < 0.1                                     # measured 0.00
+    att = rep.attributed()[0]
+    if name == "P09_gap_tilt":
+        # fitted 2.04 deg, interval [1.0, 3.1]; the truth is 2.5 deg
+        lo, hi = att["ci"]["theta"]
+        assert lo <= key["setup"]["theta_deg"] <= hi
+        assert att["params"]["theta"] == pytest.approx(2.5, abs=0.6)
+    if name == "P10_gap_asym":
+        # the truth: the measured r of the contacts (0.902 right, 0.549 left)
+        for side in ("right", "left"):
+            r = np.mean([i["r"] for i in key["impacts"] if i["side"] == side])
+            assert att["params"][f"r_{side}"] == pytest.approx(r, abs=0.01)
