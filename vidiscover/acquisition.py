@@ -337,6 +337,13 @@ def pulse_response(t: np.ndarray, kind: str, order: int, cutoff: float, tau: flo
     return out
 
 
+def _kaiser(u: np.ndarray, halfwidth: float) -> np.ndarray:
+    """The linear-phase kernel's Kaiser window at times ``u`` (samples)."""
+    return np.where(np.abs(u) < halfwidth,
+                    _i0(_KAISER_BETA * np.sqrt(np.clip(1 - (u / halfwidth) ** 2, 0, None)))
+                    / _i0(_KAISER_BETA), 0.0)
+
+
 def pulse_responses(t: np.ndarray, kind: str, order: int, cutoffs: np.ndarray,
                     taus: np.ndarray, halfwidth: int = 24,
                     skews: np.ndarray | None = None,
@@ -372,19 +379,30 @@ def pulse_responses(t: np.ndarray, kind: str, order: int, cutoffs: np.ndarray,
     skew = np.zeros(fc.shape[0]) if skews is None else np.asarray(skews, dtype=float)
     phase = np.zeros(fc.shape[0]) if phases is None else np.asarray(phases, dtype=float)
     if kind == "linear-phase":
-        # the contact shape by 16-point Gauss quadrature (exact limit at tau = 0)
-        nodes, _ = _GAUSS16
-        p = _shape_weights(skew, phase)                               # (M, 16)
-        u = t[..., None] - (0.5 * tau * nodes)[:, None, :]           # (M, N, 16)
-        # the window does not depend on the cut-off: once per distinct (tau, t) row
-        _, first, inv = np.unique(np.column_stack([tau, t]), axis=0, return_index=True,
-                                  return_inverse=True)
-        uu = u[first]
-        win = np.where(np.abs(uu) < halfwidth,
-                       _i0(_KAISER_BETA * np.sqrt(np.clip(1 - (uu / halfwidth) ** 2, 0, None)))
-                       / _i0(_KAISER_BETA), 0.0)[inv.ravel()]
-        return np.einsum("mnk,mk->mn", 2 * fc[..., None] * np.sinc(2 * fc[..., None] * u)
-                         * win, p)
+        # the contact shape by 16-point Gauss quadrature (exact limit at tau = 0, where
+        # the 16 nodes coincide and one evaluation does)
+        out = np.empty(t.shape)
+        inst = tau[:, 0] <= 0
+        if inst.any():
+            u = t[inst]
+            out[inst] = 2 * fc[inst] * np.sinc(2 * fc[inst] * u) * _kaiser(u, halfwidth)
+        wide = ~inst
+        if wide.any():
+            nodes, _ = _GAUSS16
+            p = _shape_weights(skew[wide], phase[wide])               # (M', 16)
+            tw, fw = t[wide], fc[wide][..., None]
+            u = tw[..., None] - (0.5 * tau[wide] * nodes)[:, None, :]  # (M', N, 16)
+            # the window does not depend on the cut-off: once per distinct (tau, t) row
+            # (rows of t are often all alike: then the distinct taus suffice)
+            if tw.shape[0] > 1 and np.all(tw == tw[:1]):
+                _, first, inv = np.unique(tau[wide, 0], return_index=True,
+                                          return_inverse=True)
+            else:
+                _, first, inv = np.unique(np.column_stack([tau[wide], tw]), axis=0,
+                                          return_index=True, return_inverse=True)
+            win = _kaiser(u[first], halfwidth)[inv.ravel()]
+            out[wide] = np.einsum("mnk,mk->mn", 2 * fw * np.sinc(2 * fw * u) * win, p)
+        return out
     pu, ru = _unit_poles(kind, int(order))
     wc = 2 * math.pi * fc                                             # (M, 1)
     P, R = pu[None, :] * wc, ru[None, :] * wc                         # (M, K)

@@ -534,6 +534,10 @@ class _Objective:
             extra = np.where(mm > 0, 2 * zz / (2 * math.pi * np.where(mm > 0, mm, 1.0)), 0.0)
             ref = (dc_group_delay(kind, order, 0.25) * 0.25 / cs + shape_centroid(ss, pp) * ts
                    + extra)
+        # models that coincide (durations clipped at zero, say) are evaluated once
+        _, first, inv = np.unique(np.column_stack([cs, ts, ss, pp, mm, zz]), axis=0,
+                                  return_index=True, return_inverse=True)
+        cs, ts, ss, pp, mm, zz, ref = (v[first] for v in (cs, ts, ss, pp, mm, zz, ref))
         u = self.u0 + np.arange(self.nu) * self.step
         G = pulse_responses(u[None, :] + ref[:, None], kind, order, cs, ts, halfwidth, ss, pp,
                             mm if (mm > 0).any() else None, zz)
@@ -541,7 +545,7 @@ class _Objective:
         K = K - (K @ self.Q) @ self.Q.T
         kk = np.einsum("msw,msw->ms", K, K)
         C = (K.reshape(-1, K.shape[-1]) @ self.Y.T).reshape(K.shape[0], K.shape[1], -1)
-        E = (C ** 2 / kk[:, :, None]).max(axis=1)                   # (M, n)
+        E = (C ** 2 / kk[:, :, None]).max(axis=1)[inv.ravel()]      # (M, n)
         yy = np.sum(self.Y ** 2, axis=1)
         return np.stack([(float(np.sum(yy[rows])) - E[:, rows].sum(axis=1))
                          .reshape(cutoffs.size, taus.size) for rows in groups])
