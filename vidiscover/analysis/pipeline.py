@@ -21,7 +21,7 @@ import pandas as pd
 from .._atomic import to_jsonable
 from ..errors import InputError
 from .impacts import ImpactDetection, detect_impacts
-from .pulse import PulseModel
+from .pulse import PulseModel, PulseResponse
 from .reconstruction import Reconstruction, reconstruct
 from .restitution import MU_TABLE, RestitutionEstimate, estimate_restitution, mu_table
 from .returnmap import ANALYSIS_FEATURES, FeatureContext, ReturnMap, compute_features, return_map
@@ -162,7 +162,7 @@ class AnalysisResult:
 
 def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 5.5,
             n_boot: int = 1000, seed: int = 0, flight_law=None,
-            pulse: PulseModel | None = None, offsets: bool = True,
+            pulse: PulseModel | PulseResponse | None = None, offsets: bool = True,
             features=None) -> AnalysisResult:
     """Run stages 1-4 on a recording: impacts, reconstruction, restitution, return map.
 
@@ -186,9 +186,10 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 
         inclination corrects the ball velocity at every impact of a free flight
         (exactly: the tilt is absorbed by a change of frame). The plotted ball
         path between impacts stays the friction-only one.
-    pulse : PulseModel, optional
+    pulse : PulseModel or PulseResponse, optional
         A known pulse response (e.g. ``PulseModel()`` for the exact engine's default
-        sensors); default: learned from the recording
+        sensors), or one learned before from the same instrument
+        (``AnalysisResult.detection.response``); default: learned from the recording
         (:func:`vidiscover.analysis.pulse.learn_pulse`).
     offsets : bool
         Estimate the accelerometer bias and the displacement zero offsets over whole

@@ -233,6 +233,21 @@ def _analysis_of(item, mu: float, threshold: float, meta) -> AnalysisResult:
     return analyze(item, mu=mu, threshold=threshold, n_boot=0)
 
 
+def _instrument_of(analysis: AnalysisResult):
+    """The pulse response an analysis used, for a re-analysis of the same recording.
+
+    The instrument does not change with the friction assumed: a learned response is
+    reused as it is (learning it again costs seconds and gives the same model), a
+    given model is given again; None (learn) when learning found too few pulses.
+    """
+    det = analysis.detection
+    if det.response is not None:
+        return det.response
+    if any(w.startswith("too few strong isolated pulses") for w in det.warnings):
+        return None
+    return det.pulse
+
+
 def _pool(analyses: Sequence[AnalysisResult], side: str) -> pd.DataFrame:
     frames = []
     for k, a in enumerate(analyses):
@@ -363,7 +378,9 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
                 and ((mu_id > 0 and abs(mu_id - mu) > 0.005) or theta_id)):
             mu_impacts, theta_impacts = min(max(mu_id, 0.0), 2.0), theta_id
             analyses = tuple(analyze(r, threshold=threshold, n_boot=0,
-                                     flight_law=(mu_impacts, theta_id)) for r in recs)
+                                     flight_law=(mu_impacts, theta_id),
+                                     pulse=_instrument_of(a))
+                             for r, a in zip(recs, analyses))
     data, laws = {}, {}
     for side in SIDES:
         data[side] = _pool(analyses, side)
