@@ -124,6 +124,10 @@ _COLLINEAR = 0.99           # cosine above which mu and theta are confounded
 _TOL_MU, _TOL_THETA = 5e-4, 5e-3   # fixed point reached (mu, deg)
 #: Largest admissible |theta| (deg) unless the caller widens it.
 MAX_TILT_DEG = 10.0
+#: Largest standard error of mu / theta (deg) of an identified law: the accuracy the
+#: law is meant to have (beyond it the flights do not determine the parameter, e.g.
+#: friction in flights of equal duration, whose tent integrals cancel).
+MAX_MU_SE, MAX_THETA_SE = 0.015, 0.15
 
 
 # ------------------------------------------------------------------------ result
@@ -177,9 +181,19 @@ class FlightLawResult:
         and only one combination of mu and theta is determined (close to 1: the
         recording cannot tell friction from inclination; pool clearances).
     misfit : float
-        RMS residual over RMS ball velocity jump ``(m1/m2) |dv|`` of the tents. The
-        pulse areas give the jumps to ~0.1 %; above 1 % the weak form does not hold
-        (e.g. unseen re-impacts when the ball chatters on a weak wall).
+        RMS residual over RMS ball velocity jump ``(m1/m2) |dv|`` of the tents.
+        Above ``max(1 %, precision)`` the weak form does not hold (e.g. unseen
+        re-impacts when the ball chatters on a weak wall).
+    precision : float
+        Relative precision of the jumps, measured in the recordings: RMS of the
+        data the fitted pulse model leaves in the pulse windows (pulse area less
+        model area) over RMS jump. ~0.5 % through the default sensors, 1-3 % behind
+        causal anti-alias filters and compliant walls.
+    mu_se, theta_se : float
+        Standard errors of mu and theta (deg) from the (constant, friction) fit,
+        with the residual scale at least the jumps' precision. Above
+        :data:`MAX_MU_SE` or :data:`MAX_THETA_SE` the flights do not determine
+        that parameter: not identified.
     warnings : tuple of str
     identified : bool
         Whether the law is a result (admissible, not confounded, weak form holds).
@@ -210,6 +224,9 @@ class FlightLawResult:
     residual_rms: float = float("nan")
     collinearity: float = float("nan")
     misfit: float = float("nan")
+    precision: float = float("nan")
+    mu_se: float = float("nan")
+    theta_se: float = float("nan")
     warnings: tuple = ()
     identified: bool = True
     reason: str | None = None
@@ -265,6 +282,8 @@ class FlightLawResult:
                 "residual_rms": _num(self.residual_rms),
                 "collinearity": _num(self.collinearity),
                 "misfit": _num(self.misfit),
+                "precision": _num(self.precision),
+                "mu_se": _num(self.mu_se), "theta_se": _num(self.theta_se),
                 "warnings": list(self.warnings),
                 "diagnostic_fit": {
                     "mu": _num(diag.get("mu", math.nan)),
@@ -341,6 +360,9 @@ class _Record:
         self.t_imp = np.asarray(imp["t"], float)
         self.y_imp = np.asarray(imp["y"], float)
         self.dv = np.asarray(imp["dv"], float)
+        area = det.columns.get("area") if hasattr(det.columns, "get") else None
+        self.area = (np.asarray(area, float) if area is not None and len(area) == len(self.dv)
+                     else np.full(self.dv.shape, np.nan))
         self.v_minus = np.asarray(imp["v_minus"], float)
         self.v_plus = np.asarray(imp["v_plus"], float)
         self.reliable = np.asarray(det.columns["reliable"], bool)
@@ -497,6 +519,20 @@ class _Tents:
         return np.array([self.records[r].ratio * self.records[r].dv[self.records[r].i_e[a]]
                          for r, a, _ in self.rows])
 
+    def precision(self) -> float:
+        """Relative precision of the jumps: RMS (area - dv) over RMS dv at the tents.
+
+        ``area`` integrates the data over the pulse window, ``dv`` is the fitted
+        model's area: their difference is what the pulse model misses there.
+        """
+        e = np.array([self.records[r].area[self.records[r].i_e[a]]
+                      - self.records[r].dv[self.records[r].i_e[a]] for r, a, _ in self.rows])
+        d = np.array([self.records[r].dv[self.records[r].i_e[a]] for r, a, _ in self.rows])
+        ok = np.isfinite(e)
+        if not ok.any():
+            return 0.0
+        return float(np.sqrt(np.mean(e[ok] ** 2)) / max(np.sqrt(np.mean(d[ok] ** 2)), 1e-300))
+
     def flights_used(self) -> int:
         keys = {(int(r), int(k)) for r, a, b in self.rows for k in (a, b)}
         return len(keys)
@@ -575,15 +611,25 @@ def _candidates(library, sweep, max_terms):
     return sorted(cands, key=lambda c: (len(c), c))
 
 
-def _select(Theta, Y, scales, cands, threshold, window):
+def _select(Theta, Y, scales, cands, threshold, window, floor: float = 0.0):
     """Refit every candidate by least squares and pick one by AICc.
 
     The sparsest within ``window`` of the best AICc among the candidates whose
-    every term contributes >= ``threshold``.
+    every term contributes >= ``threshold``. With a ``floor`` (m/s, the jumps'
+    precision) the criterion takes the residual variance as known, the largest
+    candidate's or ``floor**2`` whichever is larger (Mallows' Cp, small-sample
+    corrected): a term must explain more than the pulse areas' systematic errors.
 
     Returns (coefficients over the library, index of the chosen candidate).
     """
     n, J = Theta.shape
+    s2 = 0.0
+    if floor > 0:
+        big = max(cands, key=len)
+        if big and n - len(big) > 0:
+            c = np.linalg.lstsq(Theta[:, list(big)], Y, rcond=None)[0]
+            s2 = float(np.sum((Y - Theta[:, list(big)] @ c) ** 2)) / (n - len(big))
+        s2 = max(s2, floor ** 2)
     best = []
     for ci, c in enumerate(cands):
         k = len(c)
@@ -594,7 +640,9 @@ def _select(Theta, Y, scales, cands, threshold, window):
             coef[list(c)] = np.linalg.lstsq(Theta[:, list(c)], Y, rcond=None)[0]
             if np.any(np.abs(coef[list(c)]) * scales[list(c)] < threshold):
                 continue                      # a negligible term: the sparser form covers it
-        best.append((aicc(float(np.sum((Y - Theta @ coef) ** 2)), n, k), k, ci, coef))
+        rss = float(np.sum((Y - Theta @ coef) ** 2))
+        score = (rss / s2 + 2 * k + 2 * k * (k + 1) / (n - k - 1)) if s2 > 0 else aicc(rss, n, k)
+        best.append((score, k, ci, coef))
     low = min(b[0] for b in best)
     ok = [b for b in best if b[0] <= low + window]
     _, _, ci, coef = min(ok, key=lambda b: (b[1], b[0]))
@@ -622,6 +670,26 @@ def _fixed_point(tents, jc, jf, start, max_iter):
     tied = np.array([G_ACCEL * math.sin(math.radians(theta)), -max(mu, 0.0) * G_ACCEL])
     rss = max(float(np.sum((Y - Theta[:, [jc, jf]] @ tied) ** 2)), 1e-300)
     return mu, theta, rss, k + 1
+
+
+def _standard_errors(X: np.ndarray, Y: np.ndarray, floor: float) -> tuple[float, float]:
+    """Standard errors of mu and theta (deg) of the (constant, friction) fit ``X``.
+
+    The residual scale is the fit's own or ``floor`` (the jumps' precision, m/s),
+    whichever is larger: systematic errors of the pulse areas do not average out.
+    """
+    n, k = X.shape
+    if n <= k:
+        return math.inf, math.inf
+    coef = np.linalg.lstsq(X, Y, rcond=None)[0]
+    s2 = max(float(np.sum((Y - X @ coef) ** 2)) / (n - k), floor ** 2)
+    try:
+        cov = s2 * np.linalg.inv(X.T @ X)
+    except np.linalg.LinAlgError:
+        return math.inf, math.inf
+    se_c, se_f = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    s = float(np.clip(coef[0] / G_ACCEL, -0.99, 0.99))
+    return float(se_f / G_ACCEL), float(np.degrees(se_c / G_ACCEL / math.sqrt(1 - s * s)))
 
 
 def _mu_theta(names, coef):
@@ -725,6 +793,9 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
                          "candidate terms; analyse longer or more recordings")
 
     jc, jf = library.index(_CONSTANT), library.index(_FRICTION)
+    jrms = float(np.sqrt(np.mean(tents.jumps() ** 2)))
+    precision = tents.precision()
+    floor = precision * jrms
     # 1. the reconstruction-compatible law (constant + friction) to a fixed point,
     #    from several starts; the best self-consistent fit wins, rivals are reported
     points = [_fixed_point(tents, jc, jf, st, max_iter) for st in _STARTS]
@@ -741,7 +812,7 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
         Theta, Y, scales, _ = tents.assemble(max(mu, 0.0), theta)
         cands = _candidates(library, _sweep_supports(Theta, Y, scales, threshold),
                             max_terms)
-        coef, ci = _select(Theta, Y, scales, cands, threshold, window)
+        coef, ci = _select(Theta, Y, scales, cands, threshold, window, floor)
         new = _mu_theta(library, coef)
         it += 1
         if (prev == cands[ci] and abs(new[0] - mu) < _TOL_MU
@@ -759,7 +830,8 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
     mu_ci = theta_ci = (math.nan, math.nan)
     incl = {}
     if n_boot > 0:
-        boots = np.array([_select(Theta[idx], Y[idx], scales, cands, threshold, window)[0]
+        boots = np.array([_select(Theta[idx], Y[idx], scales, cands, threshold, window,
+                                  floor)[0]
                           for idx in bootstrap_rows(tents.n, n_boot, seed)])
         mus = -boots[:, jf] / G_ACCEL
         ths = np.degrees(np.arcsin(np.clip(boots[:, jc] / G_ACCEL, -1, 1)))
@@ -768,7 +840,8 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
         incl = inclusion(boots, library)
     a, b = Theta[:, jc], Theta[:, jf]
     cos = float(abs(a @ b) / max(np.linalg.norm(a) * np.linalg.norm(b), 1e-300))
-    misfit = float(np.sqrt(np.mean(resid ** 2)) / np.sqrt(np.mean(tents.jumps() ** 2)))
+    misfit = float(np.sqrt(np.mean(resid ** 2)) / jrms)
+    mu_se, theta_se = _standard_errors(Theta[:, [jc, jf]], Y, precision * jrms)
     if rivals and math.isfinite(mu_ci[0]):
         mus_all = [mu_ci[0], mu_ci[1]] + [max(p[0], 0.0) for p in rivals]
         ths_all = [theta_ci[0], theta_ci[1]] + [p[1] for p in rivals]
@@ -778,15 +851,32 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
     diagnostic = {"mu": mu, "theta_deg": theta, "terms": kept, "coefficients": kc,
                   "equation": equation, "mu_ci": mu_ci, "theta_ci": theta_ci}
     reasons = []
-    if misfit > _MAX_MISFIT:
+    if misfit > max(_MAX_MISFIT, precision):
         reasons.append(f"the weak form does not hold: the fit misses the tents by "
-                       f"{misfit:.1%} of the ball velocity jumps (pulse areas give them to "
-                       "~0.1 %; unseen re-impacts in wall chatter, the ball riding a wall, "
-                       "missed or double-counted impacts)")
+                       f"{misfit:.1%} of the ball velocity jumps (their precision here: "
+                       f"{precision:.1%}; unseen re-impacts in wall chatter, the ball riding "
+                       "a wall, missed or double-counted impacts)")
+    if mu_se > MAX_MU_SE:
+        reasons.append(f"these flights do not determine the friction (standard error of mu "
+                       f"{mu_se:.2g} > {MAX_MU_SE:g}; e.g. flights of equal duration, whose "
+                       "friction integrals cancel); pool recordings at several clearances")
+    if theta_se > MAX_THETA_SE:
+        reasons.append(f"these flights do not determine the inclination (standard error "
+                       f"{theta_se:.2g} deg > {MAX_THETA_SE:g} deg); pool recordings at "
+                       "several clearances")
     if cos > _COLLINEAR:
         reasons.append(f"friction and inclination are confounded in these flights (cosine "
                        f"{cos:.4f} between their columns); pool recordings at several "
                        "clearances")
+    if cos > _COLLINEAR and kept:
+        # the combination the flights determine: the (constant, friction) fixed point,
+        # not a sparse form (one nearly collinear column stands in for both within the
+        # precision, but not as well); nothing when no term explains the tents
+        fm, ft = best[0], best[1]
+        names = [_CONSTANT, _FRICTION]
+        coefs = [G_ACCEL * math.sin(math.radians(ft)), -fm * G_ACCEL]
+        diagnostic.update(mu=fm, theta_deg=ft, terms=names, coefficients=coefs,
+                          equation=_equation(names, coefs))
     if rivals:
         alt = ", ".join(f"(mu={p[0]:.3f}, theta={p[1]:.2f} deg)" for p in rivals)
         reasons.append(f"friction and inclination are confounded: the reconstruction also "
@@ -802,7 +892,8 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
     common = dict(n_flights=tents.flights_used(), n_equations=tents.n, library=library,
                   inclusion=incl, threshold=float(threshold), level=float(level),
                   iterations=it, residual_rms=float(np.sqrt(np.mean(resid ** 2))),
-                  collinearity=cos, misfit=misfit, max_tilt_deg=float(max_tilt_deg),
+                  collinearity=cos, misfit=misfit, precision=precision, mu_se=mu_se,
+                  theta_se=theta_se, max_tilt_deg=float(max_tilt_deg),
                   diagnostic=diagnostic)
     if reasons:
         return FlightLawResult(mu=math.nan, theta_deg=math.nan, terms=[], coefficients=[],
