@@ -123,3 +123,61 @@ def test_sweep_rows_identical_serial_joblib_and_local_cluster(client):
     pd.testing.assert_frame_equal(on_dask, serial, check_exact=True)
     pd.testing.assert_frame_equal(on_joblib, serial, check_exact=True)
     assert serial["n_impacts_true"].gt(0).all()  # rows that carry information
+
+
+@pytest.fixture(scope="module")
+def real_cluster(tmp_path_factory):
+    """A ``dask scheduler`` and two ``dask worker`` processes on loopback, started as a
+    user would start them (command line), stopped afterwards."""
+    import os
+    import shutil
+    import socket
+    import subprocess
+    import time
+
+    exe = shutil.which("dask", path=os.path.dirname(sys.executable)) or shutil.which("dask")
+    if exe is None:
+        pytest.skip("the dask command line is not installed")
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    log = tmp_path_factory.mktemp("dask")
+    env = {**os.environ, "PYTHONWARNINGS": "ignore"}
+    procs = [subprocess.Popen([exe, "scheduler", "--host", "127.0.0.1", "--port", str(port),
+                               "--dashboard-address", ":0", "--no-show"],
+                              stdout=open(log / "s.log", "w"), stderr=subprocess.STDOUT,
+                              env=env)]
+    time.sleep(1.0)
+    for k in range(2):
+        procs.append(subprocess.Popen([exe, "worker", address, "--nthreads", "1",
+                                       "--nworkers", "1", "--no-dashboard",
+                                       "--local-directory", str(log / f"w{k}")],
+                                      stdout=open(log / f"w{k}.log", "w"),
+                                      stderr=subprocess.STDOUT, env=env))
+    try:
+        with distributed.Client(address, timeout="30s") as c:
+            c.wait_for_workers(2, timeout=60)
+        yield address
+    finally:
+        for p in procs[::-1]:
+            p.terminate()
+        for p in procs:
+            try:
+                p.wait(timeout=20)
+            except subprocess.TimeoutExpired:
+                p.kill()
+
+
+@pytest.mark.slow
+def test_sweep_on_a_real_scheduler_and_two_worker_processes(real_cluster):
+    """The command-line scheduler and workers give the serial rows exactly."""
+    from vidiscover.sweep import sweep
+
+    kw = dict(settle=3.0, duration=1.5, seed=11, progress=False)
+    values = [0.005, 0.008, 0.011, 0.014]
+    serial = sweep("b", values, n_jobs=1, **kw)
+    on_dask = sweep("b", values, scheduler=real_cluster, **kw)
+    pd.testing.assert_frame_equal(on_dask, serial, check_exact=True)
+    with distributed.Client(real_cluster) as c:
+        assert len(c.nthreads()) == 2

@@ -36,6 +36,19 @@ def _apply_chunk(func: Callable[[Any], Any], chunk: Sequence[Any]) -> list[Any]:
     return [func(item) for item in chunk]
 
 
+def _apply_chunk_one_thread(func: Callable[[Any], Any], chunk: Sequence[Any]) -> list[Any]:
+    """:func:`_apply_chunk` with the BLAS/OpenMP pools of the worker held to one thread.
+
+    Each Dask worker thread is one unit of parallelism (as each loky process is, where
+    joblib limits the pools itself); native pools of the machine's width in every
+    worker would oversubscribe the cores.
+    """
+    from threadpoolctl import threadpool_limits
+
+    with threadpool_limits(limits=1):
+        return _apply_chunk(func, chunk)
+
+
 def _chunks(items: Sequence[Any], n_workers: int) -> list[list[Any]]:
     """Split ``items`` into contiguous chunks, about ``_CHUNKS_PER_WORKER`` per worker."""
     size = max(1, math.ceil(len(items) / (n_workers * _CHUNKS_PER_WORKER)))
@@ -116,8 +129,12 @@ def _run_dask(func, items, scheduler, bar) -> list[Any]:
 
         n_workers = max(1, sum(client.nthreads().values()))
         chunks = _chunks(items, n_workers)
+        # ``func`` (often a partial holding a regime model) travels to every worker
+        # once, not once per chunk
+        shared = client.scatter(func, broadcast=True, hash=False)
         # ``pure=False``: identical chunks must still run (and count) separately.
-        futures = client.map(_apply_chunk, [func] * len(chunks), chunks, pure=False)
+        futures = client.map(_apply_chunk_one_thread, [shared] * len(chunks), chunks,
+                             pure=False)
         index = {f.key: i for i, f in enumerate(futures)}
         results: list[list[Any] | None] = [None] * len(chunks)
         for future in as_completed(futures):
