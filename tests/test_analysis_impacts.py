@@ -150,6 +150,30 @@ def test_single_pulse_with_exact_time_and_area():
     assert det.side[0] == "right"
 
 
+@pytest.mark.parametrize("lag_ms, sign, share, kept", [
+    (0.8, 1, 0.15, False),     # same wall 0.8 ms later: v_k 10x faster than a return allows
+    (0.5, -1, 0.10, False),    # other wall 0.5 ms later: a 9 mm crossing at > 30 m/s
+    (-0.3, -1, 0.10, False),   # other wall just before: same crossing, backwards
+    (4.0, 1, 0.15, True),      # same wall 4 ms later: a real re-impact is possible
+    (40.0, -1, 0.10, True),    # other wall 40 ms later: beyond the instrument's span
+])
+def test_pulses_no_ball_motion_can_make_are_dropped(lag_ms, sign, share, kept):
+    """A weak pulse beside a strong one is kept only if some ball motion makes it:
+    returning to a wall or crossing the clearance takes time (the paper rig's masses;
+    the strong pulse's dv = 4 mm/s is a 0.5 m/s impact)."""
+    rng = np.random.default_rng(4)
+    n = 6400
+    t = np.arange(n) / FS
+    t0, dv = 0.4321234, 4e-3
+    t1 = t0 + lag_ms * 1e-3
+    a = (0.05 * rng.standard_normal(n) + dv * pulse_kernel(t - t0, FS, 0.45, 0.0, 24)
+         + sign * share * dv * pulse_kernel(t - t1, FS, 0.45, 0.0, 24))
+    det = detect_impacts(_synthetic(a), pulse=PulseModel())
+    assert det.n == (2 if kept else 1)
+    assert det.t[np.argmax(np.abs(det.dv))] == pytest.approx(t0, abs=1e-5)
+    assert any("no ball motion" in w for w in det.warnings) != kept
+
+
 def test_no_impacts_in_a_pure_sine():
     t = np.arange(32768) / FS
     rng = np.random.default_rng(0)
