@@ -503,6 +503,21 @@ def test_truncated_binary_file(tmp_path, simulated, suffix):
                                          r"corrupted") as err:
         read_recording(path)
     assert_single_line_error(err, f"rec{suffix}")
+    # the reader's own message is quoted in whole sentences, never cut mid-sentence
+    # (it was "... Either the file is corrupted or); copy/export it again")
+    quoted = str(err.value).partition("(")[2].rpartition(")")[0]
+    assert quoted.endswith((".", "...")) or ". " not in quoted, quoted
+
+
+def test_reader_messages_are_quoted_in_whole_sentences():
+    from vidiscover.io import _first_sentences
+
+    msg = ("Could not open Parquet input source '<Buffer>': Parquet magic bytes not found "
+           "in footer. Either the file is corrupted or this is not a parquet file. " * 2)
+    short = _first_sentences(msg)
+    assert len(short) <= 160 and short.endswith("not a parquet file.")
+    assert _first_sentences("x" * 300).endswith("...")
+    assert _first_sentences("one line\nsecond line") == "one line"
 
 
 def test_npz_columns_of_different_lengths(tmp_path, simulated):

@@ -10,12 +10,13 @@ from __future__ import annotations
 
 import functools
 import json
+import os
 import sys
 from pathlib import Path
 
 import click
 
-from .errors import InputError
+from .errors import INTERRUPTED_ENV, InputError
 from .params import PRESETS
 
 __all__ = ["main"]
@@ -60,6 +61,11 @@ def emit(as_json: bool, payload: dict, human: str) -> None:
         click.echo(json.dumps(to_jsonable(payload), indent=2))
     else:
         click.echo(human)
+
+
+#: Appended to the help of every ``--out`` that names an output folder.
+OUT_DIR_HELP = ("Replaced as a whole if vidiscover wrote it before; refused if it holds "
+                "other files.")
 
 
 def check_out_dir(out) -> Path:
@@ -151,22 +157,29 @@ class LazyGroup(click.Group):
 
         def on_sigint(signum, frame):
             interrupted.append(signum)
+            os.environ[INTERRUPTED_ENV] = "1"    # seen by _atomic before any commit
             raise KeyboardInterrupt
 
         try:
             previous = signal.signal(signal.SIGINT, on_sigint)
         except ValueError:                     # not the main thread: leave it be
             previous = None
+        os.environ.pop(INTERRUPTED_ENV, None)
         try:
-            return super().invoke(ctx)
+            result = super().invoke(ctx)
         except (KeyboardInterrupt, Exception):
             if not interrupted:
                 raise
             click.echo("vidiscover: interrupted; no output was written", err=True)
             sys.exit(130)
         finally:
+            os.environ.pop(INTERRUPTED_ENV, None)
             if previous is not None:
                 signal.signal(signal.SIGINT, previous)
+        if interrupted:                        # a library swallowed the KeyboardInterrupt
+            click.echo("vidiscover: interrupted; no output was written", err=True)
+            sys.exit(130)
+        return result
 
     def get_command(self, ctx, cmd_name):
         if cmd_name in self.lazy_commands:
@@ -236,6 +249,11 @@ def main() -> None:
     vidiscover simulates such rigs, analyses their recordings (impacts, ball motion,
     restitution), discovers flight and impact laws, classifies regimes and
     diagnoses the sim-to-real gap. Start with `vidiscover demo`.
+
+    Output folders (--out) are written whole or not at all: a folder that
+    vidiscover wrote before is replaced as a whole (nothing of the earlier run
+    survives), a new or empty one is created, and a folder holding other files is
+    refused. Ctrl-C leaves no output (exit status 130).
     """
 
 
@@ -421,12 +439,14 @@ def simulate(preset_name, b, m1, m2, c1, k1, amplitude, frequency, param, effect
 # --------------------------------------------------------------------------- demo
 @main.command()
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path),
-              default=Path("demo-output"), show_default=True, help="Output directory.")
+              default=Path("demo-output"), show_default=True,
+              help=f"Output directory. {OUT_DIR_HELP}")
 @click.option("--seed", type=int, default=0, show_default=True)
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document.")
 @handle_errors
 def demo(out, seed, as_json):
     """Run the whole toolkit on the paper's clearances (6, 7.5, 9, 15, 17.5 mm)."""
+    out = check_out_dir(out)               # before minutes of simulation
     from .demo import run_demo
 
     result = run_demo(out, seed=seed, progress=not as_json)

@@ -18,6 +18,7 @@ import csv
 import io as _stdio
 import json
 import os
+import re
 from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
@@ -67,8 +68,35 @@ def _read_bytes(path: Path, what: str, fix: str) -> bytes:
                          "its permissions") from None
 
 
+def _first_sentences(text: str, limit: int = 160) -> str:
+    """The whole sentences of ``text``'s first line that fit in ``limit`` characters.
+
+    A reader's message is quoted in one line without being cut mid-sentence: whole
+    sentences while they fit, else the first sentence cut at a word and marked "...".
+
+    Examples
+    --------
+    >>> _first_sentences("Magic bytes not found. Either the file is corrupted or this "
+    ...                  "is not a parquet file.", limit=40)
+    'Magic bytes not found.'
+    >>> _first_sentences("a b c d e f", limit=8)
+    'a b...'
+    """
+    line = (text.strip().splitlines() or [""])[0].strip()
+    if len(line) <= limit:
+        return line
+    kept = ""
+    for sentence in re.split(r"(?<=[.!?])\s+", line):
+        if len(kept) + len(sentence) + 1 > limit:
+            break
+        kept = f"{kept} {sentence}".strip()
+    if kept:
+        return kept
+    return line[:limit - 3].rsplit(" ", 1)[0].rstrip(" ,;:") + "..."
+
+
 def _corrupt(path: Path, kind: str, err: Exception) -> InputError:
-    detail = (str(err).splitlines() or [""])[0][:120]
+    detail = _first_sentences(str(err))
     return InputError(f"{path}: not a readable {kind} file, truncated or corrupted "
                       f"({type(err).__name__}: {detail}); copy/export it again")
 

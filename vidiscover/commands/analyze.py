@@ -29,7 +29,7 @@ from pathlib import Path
 
 import click
 
-from ..cli import check_out_dir, emit, handle_errors, recording_paths
+from ..cli import OUT_DIR_HELP, check_out_dir, emit, handle_errors, recording_paths
 from ..errors import InputError
 
 __all__ = ["analyze", "run_analyze", "human_lines"]
@@ -222,7 +222,8 @@ def human_lines(doc: dict) -> list[str]:
 @click.argument("recordings", nargs=-1, required=True,
                 type=click.Path(path_type=Path))
 @click.option("--out", type=click.Path(path_type=Path), required=True,
-              help="Output directory (one subdirectory per recording when several).")
+              help="Output directory (one subdirectory per recording when several). "
+                   f"{OUT_DIR_HELP}")
 @click.option("--mu", type=float, default=0.0, show_default=True,
               help="Friction coefficient assumed between ball and LO (paper eq. 8).")
 @click.option("--theta", type=float, default=0.0, show_default=True,

@@ -28,7 +28,7 @@ from pathlib import Path
 
 import click
 
-from ..cli import check_out_dir, emit, handle_errors, recording_paths
+from ..cli import OUT_DIR_HELP, check_out_dir, emit, handle_errors, recording_paths
 from ..errors import InputError
 
 __all__ = ["discover", "run_discover", "human_lines"]
@@ -166,7 +166,7 @@ def human_lines(doc: dict) -> list[str]:
 @click.command("discover")
 @click.argument("recordings", nargs=-1, type=click.Path(path_type=Path))
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path), required=True,
-              help="Output directory.")
+              help=f"Output directory. {OUT_DIR_HELP}")
 @click.option("--mu", type=float, default=0.0, show_default=True,
               help="Friction coefficient assumed by the analyses (paper eq. 8).")
 @click.option("--meta", type=click.Path(dir_okay=False, path_type=Path), default=None,

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import click
 
-from ..cli import check_out_dir, emit, handle_errors
+from ..cli import OUT_DIR_HELP, check_out_dir, emit, handle_errors
 from ..errors import InputError
 
 __all__ = ["gap", "gap_check", "run_gap", "human_gap", "human_check", "param_text"]
@@ -173,7 +173,7 @@ def run_gap(path: Path, out: Path, *, meta: Path | None = None, seed: int = 0,
 @click.command("gap")
 @click.argument("recording", type=click.Path(path_type=Path))
 @click.option("--out", type=click.Path(path_type=Path), required=True,
-              help="Output directory (summary.json, figures/, report.html).")
+              help=f"Output directory (summary.json, figures/, report.html). {OUT_DIR_HELP}")
 @click.option("--meta", type=click.Path(path_type=Path), default=None,
               help="Metadata JSON, if not beside the recording (rec.json).")
 @click.option("--seed", type=int, default=0, show_default=True,
@@ -239,7 +239,7 @@ def human_check(doc: dict) -> str:
               help="Worker processes over cases (default: all cores).")
 @click.option("--scheduler", default=None, help="Dask scheduler address (tcp://host:8786).")
 @click.option("--out", type=click.Path(path_type=Path), default=None,
-              help="Also write the result to DIR/gap_check.json.")
+              help=f"Also write the result to DIR/gap_check.json. {OUT_DIR_HELP}")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document.")
 @handle_errors
 def gap_check(quick, seed, n_jobs, scheduler, out, as_json):

@@ -19,7 +19,7 @@ from pathlib import Path
 
 import click
 
-from ..cli import _parse_params, check_out_dir, emit, handle_errors
+from ..cli import OUT_DIR_HELP, _parse_params, check_out_dir, emit, handle_errors
 from ..errors import InputError
 from ..params import PRESETS
 
@@ -169,7 +169,8 @@ def human_continue(doc: dict) -> str:
 @click.option("--max-points", type=int, default=200, show_default=True,
               help="Bound on the points per branch.")
 @click.option("--out", type=click.Path(path_type=Path), required=True,
-              help="Output directory (continuation.json, branches.csv, figures/).")
+              help="Output directory (continuation.json, branches.csv, figures/). "
+                   f"{OUT_DIR_HELP}")
 @click.option("--no-figures", is_flag=True, help="Skip the figure.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document.")
 @handle_errors

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from ..cli import check_out_file, emit, handle_errors, recording_paths
+from ..cli import OUT_DIR_HELP, check_out_dir, check_out_file, emit, handle_errors, recording_paths
 from ..errors import InputError
 from ..params import PRESETS
 
@@ -195,7 +195,7 @@ def _sweep_values(start: float, stop: float, n: int, log: bool):
 @click.option("--out", type=click.Path(file_okay=False, path_type=Path),
               default=Path("sweep-output"), show_default=True,
               help="Output directory: sweep.parquet, bifurcation.parquet, sweep.json, "
-                   "bifurcation.png (and branches.json).")
+                   f"bifurcation.png (and branches.json). {OUT_DIR_HELP}")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document.")
 @handle_errors
 def sweep(param, start, stop, n, log, preset_name, fixed, effect, seed, settle, duration,
@@ -211,6 +211,7 @@ def sweep(param, start, stop, n, log, preset_name, fixed, effect, seed, settle, 
     from ..sweep import sweep as run_sweep
     from ..sweep import write_sweep
 
+    out = check_out_dir(out)               # before the sweep, not after it
     base = _base_params(preset_name, fixed)
     values = _sweep_values(start, stop, n, log)
     if overlay:
