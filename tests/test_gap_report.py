@@ -32,3 +32,29 @@ def test_report_html_is_styled_and_has_no_python_dicts():
     assert "{'theta'" not in page and "2.0444716004247874" not in page
     assert "theta = 2.0 [1.0, 3.1]" in page
     assert "<figcaption>" in page and "linear axis" in page
+
+
+def test_waterfall_axis_is_linear_so_bar_lengths_compare():
+    from types import SimpleNamespace
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    from vidiscover.gap.components import GROUPS
+    from vidiscover.gap.figures import plot_waterfall
+
+    values = {g: 0.0 for g in GROUPS}
+    big, small = GROUPS[0], GROUPS[1]
+    values[big], values[small] = 100.0, 3.0
+    total = sum(values.values())
+    chosen = SimpleNamespace(name="inclination", gap=SimpleNamespace(total=1.0))
+    report = SimpleNamespace(nominal=SimpleNamespace(gap=SimpleNamespace(by_group=lambda: values)),
+                             selected=[chosen], gap_before=total, gap_after=1.0, name="rec",
+                             verdict="inclination")
+    ax = plot_waterfall(report)
+    assert ax.get_yscale() == "linear"
+    heights = {p.get_x(): p.get_height() for p in ax.patches}
+    bars = [heights[k] for k in sorted(heights)]
+    assert bars[0] == 100.0 and bars[1] == 3.0        # each bar as long as its value
+    labels = [t.get_text() for t in ax.texts]
+    assert "3" in labels and "100" in labels          # small bars are read from their labels

@@ -262,3 +262,71 @@ def test_index_links_every_report(case, tmp_path):
     assert "o&lt;ther" in html and f"{result.restitution.right.rms:.4g}" in html
     with pytest.raises(ValueError, match="relative path"):
         write_index([{"href": "http://example.org/r.html", "summary": s}], tmp_path)
+
+
+# ------------------------------------------------------------- values read as a person reads
+def test_restitution_above_one_is_flagged_in_the_friction_table(written):
+    out, info = written
+    html = (out / "report.html").read_text(encoding="utf-8")
+    over = [(r["mu"], side) for r in info["summary"]["mu_table"] for side in ("right", "left")
+            if r[f"{side}_rms"] is not None and r[f"{side}_rms"] > 1.0]
+    assert over, "the b = 9 mm case was chosen for its r > 1 at a large mu"
+    table = html.split("Friction sensitivity", 1)[1].split("<h2>", 1)[0]
+    assert table.count('class="flag"') == len(over)
+    assert "not physical" in table
+    for mu, side in over:
+        assert f"{side} wall r = " in table and f"at mu = {mu:g}" in table
+    # a table with every r <= 1 raises no flag
+    rows = [{"mu": 0.0, "right_rms": 0.9, "left_rms": 0.2}]
+    calm = render_report(info["summary"], mu_rows=rows).split("Friction sensitivity", 1)[1]
+    assert 'class="flag"' not in calm.split("<h2>", 1)[0]
+
+
+def test_intervals_print_as_many_digits_as_they_carry(written):
+    out, info = written
+    html = (out / "report.html").read_text(encoding="utf-8")
+    for side in ("right", "left"):
+        w = info["summary"]["restitution"][side]
+        m = re.search(rf'<td class="l">{side}</td>(?:<td>[^<]*</td>){{4}}'
+                      r"<td>([-\d.]+) \[([-\d.]+), ([-\d.]+)\]</td>", html)
+        assert m, f"no RMS [CI] cell for the {side} wall"
+        v, lo, hi = m.groups()
+        assert float(lo) < float(v) < float(hi)      # the interval is not rounded away
+        half = 0.5 * (w["ci_high"] - w["ci_low"])
+        decimals = len(v.split(".")[1]) if "." in v else 0
+        assert 0.01 <= half * 10 ** decimals < 100   # two significant digits of the half-width
+        assert abs(float(v) - w["rms"]) <= 0.5 * 10 ** -decimals * 1.0001
+
+
+def test_large_numbers_print_without_exponent():
+    from vidiscover.report.html import fmt
+
+    assert fmt(9420.4, 3) == "9420" and fmt(0.000123, 3) == "0.000123"
+    assert "e+" in fmt(3.2e9, 3)
+
+
+def test_flight_residual_figure_title_is_words_not_code():
+    from types import SimpleNamespace
+
+    from vidiscover.discovery.figures import plot_flight_residuals
+
+    res = pd.DataFrame({"recording": ["a"] * 3, "t": [0.1, 0.2, 0.3],
+                        "before": [0.01, -0.02, 0.0], "after": [0.0, 0.001, -0.001]})
+    fake = SimpleNamespace(flight=None, flight_residuals=lambda: res)
+    fig = plot_flight_residuals(fake)
+    title = fig.axes[0].get_title()
+    assert title and not re.search(r"\w+_\w+|wbar|\bdw\b", title), title
+
+
+def test_branch_figure_draws_lengths_in_mm_with_the_unit():
+    from vidiscover.orbits.figures import plot_branches
+
+    pts = [{"value": v, "stable": True, "dt_T": [0.5, 0.5], "max_multiplier": 0.5}
+           for v in (0.008, 0.009)]
+    branch = {"kind": "P1", "sides": ["right", "left"], "points": pts, "bifurcations": []}
+    fig = plot_branches([branch], param="b")
+    bottom = fig.axes[-1]
+    assert bottom.get_xlabel() == "b (mm)"
+    assert np.allclose(fig.axes[0].lines[0].get_xdata(), [8.0, 9.0])
+    assert plot_branches([branch], param="coulomb_friction.mu").axes[-1].get_xlabel() == \
+        "coulomb_friction.mu"

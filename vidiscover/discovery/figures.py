@@ -95,7 +95,8 @@ def plot_flight_residuals(result: DiscoveryResult, path: Path | None = None):
     ax_t.plot(res["t"], after, ".", ms=3, color="C0", label=f"after (RMS {rms(after):.3g})")
     ax_t.set_xlabel("impact time (s)")
     ax_t.set_ylabel("momentum residual (m/s)")
-    ax_t.set_title("wbar_out - wbar_in - dw - (tent integral of the law)")
+    ax_t.set_title("Ball velocity change per impact not explained by the impact\n"
+                   "pulse and the flight law (0 for an exact law)", fontsize=9)
     ax_t.legend(fontsize=7)
     if before.size:
         lim = float(np.max(np.abs(np.concatenate([before, after])))) or 1.0

@@ -93,15 +93,24 @@ def overlay_branches(ax, branches, *, quantity: str = "dt_T", color=None, label:
 
 
 def plot_branches(branches, path: str | Path | None = None, *, param: str = "parameter",
-                  scale: float = 1.0):
+                  scale: float | None = None):
     """Two panels: impact time differences and the largest multiplier, against ``param``.
+
+    ``scale`` multiplies the parameter values; by default lengths are drawn in mm
+    with the unit on the axis (:func:`vidiscover.sweep.axis_scale`), as in the sweep.
 
     Returns
     -------
     matplotlib.figure.Figure
     """
     from ..plotting import figure
+    from ..sweep import axis_scale
 
+    unit_scale, xlabel = axis_scale(param)
+    if scale is None:
+        scale = unit_scale
+    elif scale != unit_scale:
+        xlabel = f"{param} (x {scale:g})"
     fig, ax = figure(2, 1, sharex=True, figsize=(8, 6), height_ratios=(3, 1.6))
     top, bottom = ax[0, 0], ax[1, 0]
     overlay_branches(top, branches, scale=scale)
@@ -113,7 +122,7 @@ def plot_branches(branches, path: str | Path | None = None, *, param: str = "par
     bottom.axhline(1.0, color="0.5", lw=0.8)
     bottom.set_yscale("log")
     bottom.set_ylabel(r"max $|\mu|$")
-    bottom.set_xlabel(param)
+    bottom.set_xlabel(xlabel)
     if path is not None:
         fig.savefig(path, dpi=130)
     return fig

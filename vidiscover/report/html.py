@@ -24,6 +24,7 @@ h1{font-size:1.5em;margin:.3em 0}h2{font-size:1.15em;margin-top:1.8em;
 table{border-collapse:collapse;margin:.6em 0;font-size:.9em;background:#fff}
 th,td{border:1px solid #ccc;padding:.25em .6em;text-align:right}
 th{background:#eee}td.l,th.l{text-align:left}
+td.flag{background:#fde2e1;color:#8a1111;font-weight:600}
 .cards{display:flex;flex-wrap:wrap;gap:.8em;margin:1em 0}
 .card{background:#fff;border:1px solid #ccc;border-radius:6px;padding:.6em 1em;
  min-width:10em}.card b{display:block;font-size:1.3em}.card span{color:#666;font-size:.85em}
@@ -58,13 +59,59 @@ def fmt(value, digits: int = 4) -> str:
         return esc(value)
     if not math.isfinite(v):
         return _NA
+    if 10 ** digits <= abs(v) < 1e7:
+        return f"{v:.0f}"                   # 9420, not 9.42e+03
     return f"{v:.{digits}g}"
 
 
+def interval_text(value, low, high) -> str:
+    """``value [low, high]`` with as many decimals as the interval carries.
+
+    Two significant digits of the interval's half-width set the decimals of all
+    three numbers; without a usable interval, the value alone with :func:`fmt`.
+
+    Examples
+    --------
+    >>> interval_text(0.87816, 0.87811, 0.87821)
+    '0.878160 [0.878110, 0.878210]'
+    >>> interval_text(2.0445, 1.012, 3.077)
+    '2.0 [1.0, 3.1]'
+    """
+    try:
+        v, lo, hi = float(value), float(low), float(high)
+    except (TypeError, ValueError):
+        return fmt(value)
+    half = 0.5 * abs(hi - lo)
+    if not (math.isfinite(v) and math.isfinite(half) and half > 0):
+        return fmt(value)
+    d = min(12, max(0, 1 - math.floor(math.log10(half))))
+    return f"{v:.{d}f} [{lo:.{d}f}, {hi:.{d}f}]"
+
+
+class Flagged(str):
+    """Cell text shown highlighted (a value physics forbids, such as r > 1)."""
+
+
+#: Restitution above this is not physical: the wall would give back more than it got.
+R_PHYSICAL = 1.0
+
+
+def r_cell(value) -> str:
+    """An r value for a table cell, flagged when it exceeds :data:`R_PHYSICAL`."""
+    text = fmt(value)
+    if value is not None and isinstance(value, (int, float)) and value > R_PHYSICAL:
+        return Flagged(f"{text} (> 1, not physical)")
+    return text
+
+
 def _table(header: Sequence[str], rows: Sequence[Sequence], left: int = 1) -> str:
-    """An HTML table; cells are escaped (numbers go through :func:`fmt` first)."""
+    """An HTML table; cells are escaped (numbers go through :func:`fmt` first).
+
+    A :class:`Flagged` cell is drawn highlighted (class ``flag``).
+    """
     def cell(tag, k, v):
-        cls = ' class="l"' if k < left else ""
+        classes = (["l"] if k < left else []) + (["flag"] if isinstance(v, Flagged) else [])
+        cls = f' class="{" ".join(classes)}"' if classes else ""
         text = v if isinstance(v, str) else fmt(v)
         return f"<{tag}{cls}>{esc(text)}</{tag}>"
 
@@ -88,7 +135,21 @@ def _card(value: str, label: str) -> str:
 def _rms_ci(w: Mapping) -> str:
     if w.get("rms") is None:
         return _NA
-    return f"{fmt(w['rms'], 4)} [{fmt(w.get('ci_low'), 4)}, {fmt(w.get('ci_high'), 4)}]"
+    text = interval_text(w["rms"], w.get("ci_low"), w.get("ci_high"))
+    return Flagged(text + " (> 1, not physical)") if w["rms"] > R_PHYSICAL else text
+
+
+def _r_over_one(mu_rows: Sequence[Mapping]) -> str:
+    """A warning naming the friction values at which a wall's RMS r exceeds 1."""
+    bad = [(r.get("mu"), side, r.get(f"{side}_rms")) for r in mu_rows
+           for side in ("right", "left")
+           if isinstance(r.get(f"{side}_rms"), (int, float)) and r[f"{side}_rms"] > R_PHYSICAL]
+    if not bad:
+        return ""
+    where = "; ".join(f"{side} wall r = {fmt(v)} at mu = {fmt(mu)}" for mu, side, v in bad)
+    return ('<div class="warn">r &gt; 1 is not physical (a wall cannot give back more '
+            f"energy than it receives): {esc(where)}. The friction correction over-corrects "
+            "there: the ball-LO friction is likely below those values of mu.</div>")
 
 
 def render_report(summary: Mapping, *, figures: Mapping[str, bytes] | None = None,
@@ -182,8 +243,10 @@ def render_report(summary: Mapping, *, figures: Mapping[str, bytes] | None = Non
         parts.append(_table(
             ["mu", "r right RMS", "n right", "right too slow", "r left RMS", "n left",
              "left too slow"],
-            [[r.get("mu"), r.get("right_rms"), r.get("right_n"), r.get("right_warn"),
-              r.get("left_rms"), r.get("left_n"), r.get("left_warn")] for r in mu_rows]))
+            [[r.get("mu"), r_cell(r.get("right_rms")), r.get("right_n"), r.get("right_warn"),
+              r_cell(r.get("left_rms")), r.get("left_n"), r.get("left_warn")]
+             for r in mu_rows]))
+        parts.append(_r_over_one(mu_rows))
     proba = (summary.get("regime") or {}).get("proba")
     if proba:
         parts.append("<h2>Regime (classifier)</h2>")
@@ -293,7 +356,10 @@ def render_index(entries: Sequence[Mapping], title: str = "vidiscover reports") 
             trr = (tr or {}).get("restitution") or {}
             vals += [(trr.get("right") or {}).get("rms"), (trr.get("left") or {}).get("rms"),
                      ((tr or {}).get("regime") or {}).get("label") or _NA]
-        cells += [f"<td>{esc(v if isinstance(v, str) else fmt(v))}</td>" for v in vals]
+        vals[4:6] = [r_cell(v) for v in vals[4:6]]
+        flag = ' class="flag"'
+        cells += [f"<td{flag if isinstance(v, Flagged) else ''}>"
+                  f"{esc(v if isinstance(v, str) else fmt(v))}</td>" for v in vals]
         body.append("<tr>" + "".join(cells) + "</tr>")
     table = f"<table><thead><tr>{head}</tr></thead><tbody>{''.join(body)}</tbody></table>"
     intro = (f"<h1>{esc(title)}</h1><p>{len(entries)} analysed recording(s); click a name "
