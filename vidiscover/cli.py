@@ -107,6 +107,29 @@ def recording_paths(paths) -> list[Path]:
     return paths
 
 
+def _parse_channels_option(ctx, param, value):
+    """``--channels`` as ``{our name: channel name}``; one line + exit 2 when malformed."""
+    if value is None:
+        return None
+    from .io_lab import parse_channels
+
+    try:
+        return parse_channels(value)
+    except InputError as err:
+        _fail(str(err))
+
+
+def channels_option(func):
+    """The ``--channels x=NAME,a=NAME,xe=NAME`` option of the commands that read recordings."""
+    return click.option(
+        "--channels", default=None, metavar="x=NAME,a=NAME,xe=NAME",
+        callback=_parse_channels_option,
+        help="Which columns/channels of the recording hold x, a, xe (and t), e.g. "
+             "x=Laser,a=Accel,xe=Base; x_mV=NAME for a channel in mV. A TDMS channel may "
+             "be GROUP/NAME. Default: those named x, a, xe. Lab files' units are read "
+             "from the file.")(func)
+
+
 def _fmt(value, digits: int = 3) -> str:
     """A number for human output ('n/a' for None/NaN)."""
     if value is None or value != value:

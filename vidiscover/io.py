@@ -42,8 +42,10 @@ from .truth import GroundTruth
 __all__ = ["FORMATS", "read_recording", "read_metadata", "read_truth", "write_recording",
            "write_json", "to_jsonable", "atomic_directory", "check_output_dir"]
 
-#: Recording file formats, by suffix.
-FORMATS = (".csv", ".parquet", ".npz")
+#: Recording file formats, by suffix (the last three read only, by :mod:`.io_lab`).
+FORMATS = (".csv", ".parquet", ".npz", ".tdms", ".uff", ".unv")
+#: Formats of the lab software (TDMS, UFF 58): read with the optional extra ``formats``.
+LAB_FORMATS = (".tdms", ".uff", ".unv")
 _META_KEYS = ("b", "sample_rate", "m1", "m2", "c1", "k1", "excitation", "sensitivity")
 
 
@@ -248,8 +250,9 @@ def _read_npz(path: Path, data: bytes) -> checks.RawTable:
 _READERS = {".csv": _read_csv, ".parquet": _read_parquet, ".npz": _read_npz}
 
 
-def read_recording(path: str | os.PathLike, meta: Any = None) -> Recording:
-    """Read a recording (CSV, Parquet or NPZ) and its metadata, checking everything.
+def read_recording(path: str | os.PathLike, meta: Any = None,
+                   channels: Mapping[str, str] | None = None) -> Recording:
+    """Read a recording (CSV, Parquet, NPZ, TDMS or UFF 58) and its metadata, checked.
 
     Parameters
     ----------
@@ -258,10 +261,16 @@ def read_recording(path: str | os.PathLike, meta: Any = None) -> Recording:
         Columns ``t, x, a, xe`` in SI units, or raw voltages ``x_mV, a_mV, xe_mV``
         converted with the metadata's sensitivities (x = x_mV / x_mV_per_mm / 1000 m,
         a = a_mV / a_mV_per_g * 9.81 m/s^2); other columns are ignored. A CSV may use
-        ``,``, ``;`` or tab between cells and ``.`` as decimal point.
+        ``,``, ``;`` or tab between cells and ``.`` as decimal point. LabVIEW ``.tdms``
+        and UFF dataset 58 (``.uff``, ``.unv``) files need the extra ``formats``; their
+        time axis and units come from the file (:mod:`vidiscover.io_lab`).
     meta : path-like, dict or Metadata, optional
         The metadata (see :func:`read_metadata`); default: the sidecar JSON with the
         same stem (``rec.json`` beside ``rec.csv``).
+    channels : mapping, optional
+        Our names (``t, x, a, xe`` or ``x_mV, a_mV, xe_mV``) -> the names of the file's
+        columns or channels, e.g. ``{"x": "Laser", "a": "Accel", "xe": "Base"}``;
+        default: the columns/channels with our names (lab files: case-insensitive).
 
     Returns
     -------
@@ -293,7 +302,16 @@ def read_recording(path: str | os.PathLike, meta: Any = None) -> Recording:
     if not data.strip() or data.strip() == b"\xef\xbb\xbf":
         raise InputError(f"{path}: empty file; copy/export the recording again")
     metadata = read_metadata(meta, recording=path)
-    raw = _READERS[fmt](path, data)
+    if fmt in LAB_FORMATS:
+        from .io_lab import read_lab
+
+        raw = read_lab(path, data, channels)
+    else:
+        raw = _READERS[fmt](path, data)
+        if channels is not None:
+            from .io_lab import map_columns
+
+            raw = map_columns(raw, channels)
     cols = checks.pick_columns(raw)
     by_name = raw.fetch(raw, list(cols.values()))
     values = {sig: by_name[col] for sig, col in cols.items()}
@@ -509,6 +527,9 @@ def write_recording(rec: Recording, path: str | os.PathLike,
     """
     path = Path(path)
     fmt = _format_of(path)
+    if fmt in LAB_FORMATS:
+        raise InputError(f"{path}: vidiscover reads {fmt} files but does not write them; "
+                         "write .csv, .parquet or .npz")
     units = rec.meta.extra.get("units", "SI") if units is None else units
     if units not in ("SI", "mV"):
         raise InputError(f"{path}: units must be 'SI' or 'mV', was {units!r}")

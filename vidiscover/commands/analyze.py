@@ -29,7 +29,14 @@ from pathlib import Path
 
 import click
 
-from ..cli import OUT_DIR_HELP, check_out_dir, emit, handle_errors, recording_paths
+from ..cli import (
+    OUT_DIR_HELP,
+    channels_option,
+    check_out_dir,
+    emit,
+    handle_errors,
+    recording_paths,
+)
 from ..errors import InputError
 
 __all__ = ["analyze", "run_analyze", "human_lines"]
@@ -53,16 +60,16 @@ def _unique_stems(paths: list[Path]) -> list[str]:
     return out
 
 
-def load_inputs(paths, meta: Path | None) -> list:
+def load_inputs(paths, meta: Path | None, channels: dict | None = None) -> list:
     """Read every recording (and truth) before any work: bad input fails at once."""
-    return [_load(Path(p), meta) for p in paths]
+    return [_load(Path(p), meta, channels) for p in paths]
 
 
-def _load(path: Path, meta: Path | None):
+def _load(path: Path, meta: Path | None, channels: dict | None = None):
     """(Recording, truth or None) of one file; every problem is an InputError."""
     from ..io import read_recording, read_truth
 
-    rec = read_recording(path, meta=meta)
+    rec = read_recording(path, meta=meta, channels=channels)
     truth_file = path.with_name(f"{path.stem}.truth.json")
     truth = read_truth(truth_file) if truth_file.is_file() else None
     return rec, truth
@@ -101,7 +108,8 @@ def read_flight_law(path: Path) -> tuple[float, float]:
 
 def run_analyze(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
                 figures: bool = True, seed: int = 0, progress: bool = False,
-                model=None, theta_deg: float = 0.0, loaded=None) -> list[dict]:
+                model=None, theta_deg: float = 0.0, loaded=None,
+                channels: dict | None = None) -> list[dict]:
     """Analyse recordings and write their reports (the ``analyze`` command, in-process).
 
     Parameters
@@ -129,6 +137,8 @@ def run_analyze(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
         towards the right wall).
     loaded : list of (Recording, GroundTruth or None), optional
         The recordings already read (by :func:`load_inputs`).
+    channels : dict, optional
+        Our names -> the recordings' column/channel names (``--channels``).
 
     Returns
     -------
@@ -148,7 +158,7 @@ def run_analyze(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
     paths = recording_paths(paths)
     out = check_out_dir(out)
     if loaded is None:
-        loaded = load_inputs(paths, meta)
+        loaded = load_inputs(paths, meta, channels)
     # heavy imports only once every input has been checked
     from tqdm.auto import tqdm
 
@@ -236,6 +246,7 @@ def human_lines(doc: dict) -> list[str]:
 @click.option("--model", "model_path", type=click.Path(path_type=Path), default=None,
               help="Regime model (.skops from `vidiscover train`) labelling the regime; "
                    "default: the model shipped with vidiscover, if installed.")
+@channels_option
 @click.option("--no-figures", is_flag=True, help="Skip the figures (faster).")
 @click.option("--seed", type=int, default=0, show_default=True,
               help="Seed of the bootstrap confidence intervals.")
@@ -243,21 +254,22 @@ def human_lines(doc: dict) -> list[str]:
               help="Print one JSON document: the summary (one recording) or a list of "
                    "summaries (several).")
 @handle_errors
-def analyze(recordings, out, mu, theta, flight_law, meta, model_path, no_figures, seed,
-            as_json):
+def analyze(recordings, out, mu, theta, flight_law, meta, model_path, channels, no_figures,
+            seed, as_json):
     """Find impacts, reconstruct the ball, estimate restitution per wall, report.
 
-    RECORDINGS are CSV/Parquet/NPZ files with columns t, x, a, xe and a metadata
-    sidecar (rec.json). Writes summary.json, impacts.csv, flights.csv, figures/
-    and a self-contained report.html; a simulated recording's ground truth
-    (rec.truth.json) is overlaid when present.
+    RECORDINGS are CSV/Parquet/NPZ files with columns t, x, a, xe (or TDMS/UFF 58
+    files with such channels) and a metadata sidecar (rec.json). Writes
+    summary.json, impacts.csv, flights.csv, figures/ and a self-contained
+    report.html; a simulated recording's ground truth (rec.truth.json) is overlaid
+    when present.
     """
     if flight_law is not None:
         mu, theta = read_flight_law(flight_law)
     _check_mu(mu)
     paths = recording_paths(recordings)
     check_out_dir(out)
-    loaded = load_inputs(paths, meta)       # reject bad files before the heavy imports
+    loaded = load_inputs(paths, meta, channels)     # reject bad files before the heavy imports
     if model_path is not None:
         from ..regimes.classifier import load_model
 
@@ -267,7 +279,7 @@ def analyze(recordings, out, mu, theta, flight_law, meta, model_path, no_figures
 
         model = default_regime_model()
     docs = run_analyze(paths, out, mu=mu, meta=meta, figures=not no_figures,
-                       seed=seed, theta_deg=theta,
+                       seed=seed, theta_deg=theta, channels=channels,
                        progress=not as_json and len(paths) > 1, model=model, loaded=loaded)
     human = [line for d in docs for line in human_lines(d)]
     if len(docs) > 1:

@@ -28,7 +28,14 @@ from pathlib import Path
 
 import click
 
-from ..cli import OUT_DIR_HELP, check_out_dir, emit, handle_errors, recording_paths
+from ..cli import (
+    OUT_DIR_HELP,
+    channels_option,
+    check_out_dir,
+    emit,
+    handle_errors,
+    recording_paths,
+)
 from ..errors import InputError
 
 __all__ = ["discover", "run_discover", "human_lines"]
@@ -38,7 +45,7 @@ def run_discover(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
                  seed: int = 0, n_boot: int = 200, level: float = 0.95,
                  criterion: str = "aicc", min_effect: float | None = None,
                  max_tilt: float = 10.0, flight: bool = True, figures: bool = True,
-                 progress: bool = False) -> dict:
+                 progress: bool = False, channels: dict | None = None) -> dict:
     """Discover the laws of pooled recordings and write the results (in-process CLI).
 
     Parameters
@@ -71,6 +78,8 @@ def run_discover(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
         Render the figures.
     progress : bool
         Show a progress bar on stderr.
+    channels : dict, optional
+        Our names -> the recordings' column/channel names (``--channels``).
 
     Returns
     -------
@@ -108,7 +117,8 @@ def run_discover(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
         raise InputError(f"--seed must be >= 0, was {seed}")
     paths = recording_paths(paths)
     out = check_out_dir(out)
-    recordings = [read_recording(p, meta=meta) for p in paths]   # check all inputs first
+    # check all inputs first
+    recordings = [read_recording(p, meta=meta, channels=channels) for p in paths]
     result = discover_laws(recordings, mu=mu, seed=seed, n_boot=n_boot, level=level,
                            criterion=criterion, flight=flight, progress=progress,
                            min_effect=float(min_effect), max_tilt_deg=float(max_tilt))
@@ -184,12 +194,13 @@ def human_lines(doc: dict) -> list[str]:
                    "dependence [default: 0.006, calibrated on constant-r data].")
 @click.option("--max-tilt", type=float, default=10.0, show_default=True,
               help="Largest admissible |theta| of the flight law (deg).")
+@channels_option
 @click.option("--no-flight", is_flag=True, help="Skip the flight-law discovery.")
 @click.option("--no-figures", is_flag=True, help="Skip the figures (faster).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document.")
 @handle_errors
 def discover(recordings, out, mu, meta, seed, n_boot, level, criterion, min_effect, max_tilt,
-             no_flight, no_figures, as_json):
+             channels, no_flight, no_figures, as_json):
     """Discover the flight law and the impact law per wall from pooled recordings.
 
     RECORDINGS are CSV/Parquet/NPZ files with columns t, x, a, xe and a metadata
@@ -200,5 +211,5 @@ def discover(recordings, out, mu, meta, seed, n_boot, level, criterion, min_effe
     doc = run_discover(recordings, out, mu=mu, meta=meta, seed=seed, n_boot=n_boot,
                        level=level, criterion=criterion, min_effect=min_effect,
                        max_tilt=max_tilt, flight=not no_flight, figures=not no_figures,
-                       progress=not as_json and len(recordings) > 1)
+                       progress=not as_json and len(recordings) > 1, channels=channels)
     emit(as_json, doc, "\n".join(human_lines(doc)))

@@ -17,7 +17,7 @@ from pathlib import Path
 
 import click
 
-from ..cli import OUT_DIR_HELP, check_out_dir, emit, handle_errors
+from ..cli import OUT_DIR_HELP, channels_option, check_out_dir, emit, handle_errors
 from ..errors import InputError
 
 __all__ = ["gap", "gap_check", "run_gap", "human_gap", "human_check", "param_text"]
@@ -140,7 +140,8 @@ def _html(doc: dict, figures: list[str]) -> str:
 
 
 def run_gap(path: Path, out: Path, *, meta: Path | None = None, seed: int = 0,
-            n_jobs: int | None = None, scheduler=None, figures: bool = True) -> dict:
+            n_jobs: int | None = None, scheduler=None, figures: bool = True,
+            channels: dict | None = None) -> dict:
     """Diagnose one recording file and write the outputs (the ``gap`` command).
 
     Returns
@@ -153,7 +154,7 @@ def run_gap(path: Path, out: Path, *, meta: Path | None = None, seed: int = 0,
     from ..io import read_recording
 
     out = check_out_dir(out)
-    rec = read_recording(path, meta=meta)
+    rec = read_recording(path, meta=meta, channels=channels)
     report = diagnose(rec, seed=seed, n_jobs=n_jobs, scheduler=scheduler)
     doc = report.to_dict()
     files = ["summary.json"]
@@ -181,10 +182,11 @@ def run_gap(path: Path, out: Path, *, meta: Path | None = None, seed: int = 0,
 @click.option("--n-jobs", type=int, default=None,
               help="Worker processes for the candidate fits (default: all cores).")
 @click.option("--scheduler", default=None, help="Dask scheduler address (tcp://host:8786).")
+@channels_option
 @click.option("--no-figures", is_flag=True, help="Skip the figures.")
 @click.option("--json", "as_json", is_flag=True, help="Print the summary as one JSON document.")
 @handle_errors
-def gap(recording, out, meta, seed, n_jobs, scheduler, no_figures, as_json):
+def gap(recording, out, meta, seed, n_jobs, scheduler, channels, no_figures, as_json):
     """Diagnose the sim-to-real gap of RECORDING against the paper's nominal model.
 
     Says where the gap lies (components), which catalogue effect removes it
@@ -193,7 +195,7 @@ def gap(recording, out, meta, seed, n_jobs, scheduler, no_figures, as_json):
     if seed < 0:
         raise InputError(f"--seed must be >= 0, was {seed!r}")
     doc = run_gap(recording, out, meta=meta, seed=seed, n_jobs=_check_jobs(n_jobs),
-                  scheduler=scheduler, figures=not no_figures)
+                  scheduler=scheduler, figures=not no_figures, channels=channels)
     emit(as_json, doc, human_gap(doc))
 
 

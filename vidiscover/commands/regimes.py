@@ -6,7 +6,15 @@ from pathlib import Path
 
 import click
 
-from ..cli import OUT_DIR_HELP, check_out_dir, check_out_file, emit, handle_errors, recording_paths
+from ..cli import (
+    OUT_DIR_HELP,
+    channels_option,
+    check_out_dir,
+    check_out_file,
+    emit,
+    handle_errors,
+    recording_paths,
+)
 from ..errors import InputError
 from ..params import PRESETS
 
@@ -34,10 +42,11 @@ def _proba_text(proba: dict) -> str:
 @click.option("--model", "model_path", type=click.Path(dir_okay=False, path_type=Path),
               default=None, help="Regime model (.skops from `vidiscover train`; default: "
                                  "the model shipped with vidiscover).")
+@channels_option
 @click.option("--json", "as_json", is_flag=True,
               help="Print a JSON list of {file, label, proba, warnings}.")
 @handle_errors
-def classify(recordings, meta, model_path, as_json):
+def classify(recordings, meta, model_path, channels, as_json):
     """Label recordings by regime, with class probabilities.
 
     Every recording is analysed from its sensor data alone (impacts, return map,
@@ -59,7 +68,7 @@ def classify(recordings, meta, model_path, as_json):
     from ..regimes.classifier import load_default_model, load_model
 
     recordings = recording_paths(recordings)
-    recs = [read_recording(p, meta=meta) for p in recordings]
+    recs = [read_recording(p, meta=meta, channels=channels) for p in recordings]
     model = load_model(model_path) if model_path is not None else load_default_model()
     results = [model.classify(rec, file=str(p)).to_dict() for p, rec in zip(recordings, recs)]
     for r in results:
