@@ -44,7 +44,7 @@ from .errors import InputError
 from .params import SystemParams
 
 __all__ = ["ENTROPY", "SPLITS", "N_CASES", "N_SUITE", "RANGES", "RealismCase", "realism_case",
-           "realism_corpus"]
+           "realism_corpus", "draw_realism_case"]
 
 #: Root entropy of every draw of the corpus (fixed: changing it changes the corpus).
 ENTROPY = 20261123
@@ -229,6 +229,16 @@ def realism_case(split: str, index: int) -> RealismCase:
     if index < 0:
         raise InputError(f"corpus index must be >= 0, was {index!r}")
     rng = np.random.default_rng([ENTROPY, SPLITS[split], int(index)])
+    return draw_realism_case(rng, split, int(index))
+
+
+def draw_realism_case(rng: np.random.Generator, split: str = "train", index: int = 0
+                      ) -> RealismCase:
+    """Draw a rig, contact model and instrument chain as the corpus does, from ``rng``.
+
+    :func:`realism_case` draws the corpus's fixed splits with it; the regime
+    classifier's training sets draw more cases from their own seeds.
+    """
     m1 = _log_uniform(rng, *RANGES["m1"])
     f0 = _uniform(rng, "f0")
     k1 = m1 * (2 * math.pi * f0) ** 2
