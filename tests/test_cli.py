@@ -84,8 +84,8 @@ def test_demo_writes_recordings_reports_and_an_index(tmp_path):
                   f"{stem}/summary.json", f"{stem}/impacts.csv", f"{stem}/report.html"):
             assert f in written
     index = (out / "index.html").read_text(encoding="utf-8")
-    assert re.findall(r'href="([^"]+)"', index) == ["paper_b9mm/report.html",
-                                                    "paper_b15mm/report.html"]
+    assert re.findall(r'<a href="([^"]+)"', index) == ["paper_b9mm/report.html",
+                                                      "paper_b15mm/report.html"]
     for r in doc["recordings"]:
         assert abs(r["r_right_rms"] - 0.8782) < 0.02 and abs(r["r_left_rms"] - 0.2018) < 0.02
         s = json.loads((out / r["report"]).with_name("summary.json").read_text())

@@ -92,7 +92,7 @@ def test_several_recordings_subdirs_index_and_json_list(runner, recs, tmp_path):
         assert json.loads((sub / "summary.json").read_text())["impacts"] == d["impacts"]
         assert len(pd.read_csv(sub / "impacts.csv")) == d["impacts"]["n"]
     index = (out / "index.html").read_text(encoding="utf-8")
-    assert re.findall(r'href="([^"]+)"', index) == ["b9/report.html", "b15/report.html"]
+    assert re.findall(r'<a href="([^"]+)"', index) == ["b9/report.html", "b15/report.html"]
 
 
 def test_same_stem_twice_gets_two_subdirs(runner, recs, tmp_path):

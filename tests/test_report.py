@@ -188,7 +188,9 @@ def test_report_is_self_contained(written):
     out, _ = written
     html = (out / "report.html").read_text(encoding="utf-8")
     assert _external_refs(html) == []
-    assert not re.search(r"<script|<link|<iframe|@import|url\(", html, flags=re.I)
+    # the one <link> is the empty inline icon (no favicon.ico request)
+    assert re.findall(r"<link[^>]*>", html, flags=re.I) == ['<link rel="icon" href="data:,">']
+    assert not re.search(r"<script|<iframe|@import|url\(", html, flags=re.I)
     assert html.startswith("<!DOCTYPE html>") and html.rstrip().endswith("</html>")
     for text in ("Restitution per wall", "Friction sensitivity", "Ground truth", "Warnings",
                  "Recording"):
@@ -257,7 +259,7 @@ def test_index_links_every_report(case, tmp_path):
                {"href": "other/report.html", "summary": {**s, "recording": "o<ther"}}]
     path = write_index(entries, tmp_path)
     html = path.read_text(encoding="utf-8")
-    links = re.findall(r'href="([^"]+)"', html)
+    links = [h for h in re.findall(r'href="([^"]+)"', html) if not h.startswith("data:")]
     assert links == ["b9/report.html", "other/report.html"]
     assert "o&lt;ther" in html and f"{result.restitution.right.rms:.4g}" in html
     with pytest.raises(ValueError, match="relative path"):

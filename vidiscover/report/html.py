@@ -121,9 +121,15 @@ def _table(header: Sequence[str], rows: Sequence[Sequence], left: int = 1) -> st
     return f"<table><thead><tr>{head}</tr></thead><tbody>{body}</tbody></table>"
 
 
+#: An empty inline icon: a browser serving the folder over http asks for no favicon.ico
+#: (whose 404 would be the page's only console error).
+_ICON = '<link rel="icon" href="data:,">'
+
+
 def _page(title: str, body: str) -> str:
     return ("<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             "<meta name=\"viewport\" content=\"width=device-width, initial-scale=1\">"
+            f"{_ICON}"
             f"<title>{esc(title)}</title><style>{_CSS}</style></head>"
             f"<body><main>{body}</main></body></html>\n")
 
