@@ -278,6 +278,10 @@ def test_restitution_above_one_is_flagged_in_the_friction_table(written):
     assert "not physical" in table
     for mu, side in over:
         assert f"{side} wall r = " in table and f"at mu = {mu:g}" in table
+    rows = info["summary"]["mu_table"]
+    for side in ("right", "left"):      # a wall left with no estimate at a larger mu is named
+        if rows[0][f"{side}_n"] and any(not r[f"{side}_n"] for r in rows[1:]):
+            assert f"no {side}-wall estimate is usable" in table
     # a table with every r <= 1 raises no flag
     rows = [{"mu": 0.0, "right_rms": 0.9, "left_rms": 0.2}]
     calm = render_report(info["summary"], mu_rows=rows).split("Friction sensitivity", 1)[1]

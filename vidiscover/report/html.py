@@ -150,12 +150,20 @@ def _r_over_one(mu_rows: Sequence[Mapping]) -> str:
     bad = [(r.get("mu"), side, r.get(f"{side}_rms")) for r in mu_rows
            for side in ("right", "left")
            if isinstance(r.get(f"{side}_rms"), (int, float)) and r[f"{side}_rms"] > R_PHYSICAL]
+    # a wall whose every estimate was rejected (r beyond the plausible bound) at larger mu
+    lost = {side: [r.get("mu") for r in mu_rows[1:] if not r.get(f"{side}_n")]
+            for side in ("right", "left") if mu_rows[0].get(f"{side}_n")}
+    lost_text = "; ".join(f"at mu = {', '.join(fmt(m) for m in mus)} no {side}-wall estimate "
+                          "is usable"
+                          for side, mus in lost.items() if mus)
     if not bad:
         return ""
     where = "; ".join(f"{side} wall r = {fmt(v)} at mu = {fmt(mu)}" for mu, side, v in bad)
     return ('<div class="warn">r &gt; 1 is not physical (a wall cannot give back more '
-            f"energy than it receives): {esc(where)}. The friction correction over-corrects "
-            "there: the ball-LO friction is likely below those values of mu.</div>")
+            f"energy than it receives): {esc(where)}"
+            + (f"; {esc(lost_text)}" if lost_text else "")
+            + ". The friction correction over-corrects there: the ball-LO friction is "
+            "likely below those values of mu.</div>")
 
 
 def render_report(summary: Mapping, *, figures: Mapping[str, bytes] | None = None,
