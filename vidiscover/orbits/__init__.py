@@ -1,6 +1,7 @@
 """Periodic impacting orbits of the exact model, their stability, and continuation.
 
-See DESIGN.md section 10: Newton shooting on the exact impact map
+See the docs page 'Periodic orbits and continuation' (docs/orbits.md): Newton
+shooting on the exact impact map
 (:mod:`.shooting`), Floquet multipliers from flow Jacobians and saltation matrices
 (:mod:`.monodromy`), initial guesses and the orbit search (:mod:`.find`),
 pseudo-arclength continuation with fold, period-doubling, Neimark-Sacker and grazing

@@ -137,7 +137,7 @@ class Branch:
     end_reason: str = ""
 
     def to_dict(self) -> dict:
-        """JSON-ready form (DESIGN.md section 6: ``kind``, ``points[]``)."""
+        """JSON-ready form (keys: docs page 'Periodic orbits and continuation', JSON)."""
         return {"param": self.param, "kind": self.kind,
                 "sides": [SIDE_NAME[s] for s in self.sides],
                 "period_cycles": self.period_cycles,

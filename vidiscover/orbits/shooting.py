@@ -380,7 +380,7 @@ class Orbit:
         return orbit_kind(self) if self.found else "not_found"
 
     def to_dict(self) -> dict:
-        """JSON-ready form (DESIGN.md section 6 keys plus details)."""
+        """JSON-ready form (keys: docs page 'Periodic orbits and continuation', JSON)."""
         if not self.found:
             return {"kind": "not_found", "found": False, "reason": self.reason,
                     "impacts_per_period": len(self.sides) / self.period_cycles,
@@ -405,7 +405,7 @@ class Orbit:
 
 
 def orbit_kind(orbit: Orbit) -> str:
-    """The regime label (DESIGN.md section 4) a simulation sitting on ``orbit`` would get.
+    """The regime label a simulation sitting on ``orbit`` would get (docs page 'Regime labels').
 
     ``1ipc``: one impact in every forcing cycle; ``2ipc_sym``/``2ipc_asym``: two
     alternating impacts in every cycle, with the asymmetry of the label definition;
