@@ -12,7 +12,9 @@ the build (myst-nb) at the reduced size the test suite uses; set
 
 from __future__ import annotations
 
+import atexit
 import os
+import shutil
 import sys
 import tempfile
 from pathlib import Path
@@ -29,6 +31,7 @@ os.environ["MPLBACKEND"] = "module://matplotlib_inline.backend_inline"
 # shown as images only once the inline backend is active: start every kernel with it
 # (as ``%matplotlib inline`` would), through an IPython profile of this build's own.
 _IPYTHONDIR = Path(tempfile.mkdtemp(prefix="vidiscover-docs-ipython-"))
+atexit.register(shutil.rmtree, _IPYTHONDIR, ignore_errors=True)
 (_IPYTHONDIR / "profile_default").mkdir()
 (_IPYTHONDIR / "profile_default" / "ipython_kernel_config.py").write_text(
     'c.InteractiveShellApp.matplotlib = "inline"\n')
