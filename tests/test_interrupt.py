@@ -83,3 +83,32 @@ def test_errors_without_an_interrupt_still_propagate(tmp_path):
                           env={**os.environ, "PYTHONPATH": str(tmp_path)})
     assert proc.returncode == 1
     assert "a genuine bug" in proc.stderr
+
+
+def test_a_swallowed_interrupt_is_raised_again_and_cleanups_finish(tmp_path):
+    # An extension module's import can turn the KeyboardInterrupt into an ImportError
+    # that a fallback catches (seen in scipy/sklearn imports under load: the command
+    # then ran to its end). The group raises it again until the command stops; the
+    # atomic writers' cleanup is not cut short by the repeats.
+    (tmp_path / "vd_swallow_cmd.py").write_text(
+        "import os, signal, time\n"
+        "from vidiscover._atomic import atomic_directory\n"
+        "with atomic_directory('out') as tmp:\n"
+        "    (tmp / 'half.txt').write_text('x')\n"
+        "    try:\n"
+        "        os.kill(os.getpid(), signal.SIGINT)\n"
+        "        time.sleep(0.5)\n"
+        "    except KeyboardInterrupt:\n"
+        "        pass                      # swallowed, as a fallback import would\n"
+        "    time.sleep(20)                # the rest of a long command\n")
+    script = ("from vidiscover.cli import main; "
+              "main.lazy_commands['swallow'] = 'vd_swallow_cmd:cmd'; main()")
+    start = time.monotonic()
+    proc = subprocess.run([sys.executable, "-c", script, "swallow"], cwd=tmp_path,
+                          capture_output=True, text=True, timeout=60,
+                          env={**os.environ, "PYTHONPATH": os.pathsep.join(
+                              [str(tmp_path), os.environ.get("PYTHONPATH", "")])})
+    assert time.monotonic() - start < 10.0
+    assert proc.returncode == 130, proc.stderr
+    assert proc.stderr.strip() == "vidiscover: interrupted; no output was written"
+    assert {p.name for p in tmp_path.iterdir()} <= {"vd_swallow_cmd.py", "__pycache__"}

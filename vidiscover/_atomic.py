@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from ._interrupt import cleanup
 from .errors import INTERRUPTED_ENV, InputError
 
 _replace = os.replace  # seam: tests inject a failure while committing files
@@ -122,9 +123,10 @@ def write_group(jobs: list[tuple[Path, Callable[[Path], None]]],
         _stop_if_interrupted()
         _commit([(tmp, target) for tmp, (target, _) in zip(temps, jobs, strict=True)], remove)
     except BaseException:
-        for tmp in temps:
-            with contextlib.suppress(OSError):
-                tmp.unlink()
+        with cleanup():
+            for tmp in temps:
+                with contextlib.suppress(OSError):
+                    tmp.unlink()
         raise
     return [target for target, _ in jobs]
 
@@ -146,12 +148,13 @@ def _commit(pairs: list[tuple[Path, Path]], remove: tuple[Path, ...]) -> None:
             done.append((target, backup))
             _replace(tmp, target)
     except BaseException:
-        for target, backup in reversed(done):
-            with contextlib.suppress(OSError):
-                if backup is not None:
-                    _replace(backup, target)
-                elif target.exists():
-                    target.unlink()
+        with cleanup():
+            for target, backup in reversed(done):
+                with contextlib.suppress(OSError):
+                    if backup is not None:
+                        _replace(backup, target)
+                    elif target.exists():
+                        target.unlink()
         raise
     for _, backup in done:
         if backup is not None:
@@ -283,8 +286,9 @@ def atomic_directory(out_dir: str | os.PathLike) -> Iterator[Path]:
         (tmp / MARKER).write_text(_MARKER_TEXT, encoding="utf-8")
         _stop_if_interrupted()
     except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        _remove_dirs(created)
+        with cleanup():
+            shutil.rmtree(tmp, ignore_errors=True)
+            _remove_dirs(created)
         raise
     old = None
     try:
@@ -293,9 +297,10 @@ def atomic_directory(out_dir: str | os.PathLike) -> Iterator[Path]:
             out.rename(old)
         tmp.rename(out)
     except BaseException:
-        if old is not None and not out.exists():
-            old.rename(out)
-        shutil.rmtree(tmp, ignore_errors=True)
+        with cleanup():
+            if old is not None and not out.exists():
+                old.rename(out)
+            shutil.rmtree(tmp, ignore_errors=True)
         raise
     finally:
         if old is not None and out.exists():

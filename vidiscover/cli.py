@@ -16,10 +16,15 @@ from pathlib import Path
 
 import click
 
+from ._interrupt import in_cleanup
 from .errors import INTERRUPTED_ENV, InputError
 from .params import PRESETS
 
 __all__ = ["main"]
+
+#: After a Ctrl-C, the KeyboardInterrupt is raised again this often (s) until the
+#: command stops, in case a library swallowed it.
+REPEAT_S = 0.25
 
 PAPER_CLEARANCES_MM = (6.0, 7.5, 9.0, 15.0, 17.5)
 #: Restitution the paper reports at b = 9 mm (Table 2, mu = 0), used by the demo.
@@ -174,11 +179,24 @@ class LazyGroup(click.Group):
         # Ctrl-C can land anywhere, also while a command module (and pandas, scipy
         # ...) is being imported, where a half-finished import may surface as some
         # other error. Whatever escapes after a SIGINT is reported as the interrupt.
+        # Some libraries swallow the KeyboardInterrupt (an extension module's import
+        # turns it into an ImportError that a fallback catches): after a Ctrl-C it is
+        # raised again every REPEAT_S until the command stops.
         import signal
 
         interrupted = []
+        repeat = hasattr(signal, "setitimer")
+
+        def on_repeat(signum, frame):
+            if interrupted and not in_cleanup():
+                raise KeyboardInterrupt
 
         def on_sigint(signum, frame):
+            if interrupted and in_cleanup():   # a second Ctrl-C: let the cleanup end
+                return
+            if not interrupted and repeat:
+                signal.signal(signal.SIGALRM, on_repeat)
+                signal.setitimer(signal.ITIMER_REAL, REPEAT_S, REPEAT_S)
             interrupted.append(signum)
             os.environ[INTERRUPTED_ENV] = "1"    # seen by _atomic before any commit
             raise KeyboardInterrupt
@@ -189,7 +207,12 @@ class LazyGroup(click.Group):
             previous = None
         os.environ.pop(INTERRUPTED_ENV, None)
         try:
-            result = super().invoke(ctx)
+            try:
+                result = super().invoke(ctx)
+            finally:
+                if interrupted and repeat:     # no repeat from here on; a late one
+                    signal.setitimer(signal.ITIMER_REAL, 0.0)   # is ignored
+                    signal.signal(signal.SIGALRM, signal.SIG_IGN)
         except (KeyboardInterrupt, Exception):
             if not interrupted:
                 raise

@@ -70,6 +70,11 @@ def _read_bytes(path: Path, what: str, fix: str) -> bytes:
                          "its permissions") from None
 
 
+def _blank(data: bytes) -> bool:
+    """Whether ``data`` holds nothing but whitespace and a BOM (scanned, not copied)."""
+    return re.search(rb"[^\s\xef\xbb\xbf]", data) is None
+
+
 def _first_sentences(text: str, limit: int = 160) -> str:
     """The whole sentences of ``text``'s first line that fit in ``limit`` characters.
 
@@ -107,22 +112,50 @@ def _is_blank(row: list[str]) -> bool:
     return not row or (len(row) == 1 and not row[0].strip())
 
 
-def _read_csv(path: Path, data: bytes) -> checks.RawTable:
+def _decode(path: Path, data: bytes) -> str:
     try:
-        text = data.decode("utf-8-sig")
+        return data.decode("utf-8-sig")
     except UnicodeDecodeError as err:
         raise InputError(f"{path}: not UTF-8 text (bad byte at offset {err.start}); save the "
                          "CSV as UTF-8 text, or name a binary file .parquet or .npz") from None
-    first = text.lstrip().partition("\n")[0]
+
+
+def _first_line(data: bytes) -> bytes:
+    """The first non-blank line of ``data`` (without a BOM), found without copying it all."""
+    start = 3 if data.startswith(b"\xef\xbb\xbf") else 0
+    while start < len(data):
+        end = data.find(b"\n", start)
+        end = len(data) if end < 0 else end
+        line = data[start:end]
+        if line.strip():
+            return line
+        start = end + 1
+    return b""
+
+
+def _read_csv(path: Path, data: bytes) -> checks.RawTable:
+    # The text is decoded as a whole only where a row must be diagnosed: a 200 MB file is
+    # parsed by pyarrow from the bytes (a decoded copy and a StringIO of it cost ~5x the
+    # file). ASCII is UTF-8, so only other files are checked by decoding them.
+    if not data.isascii():
+        _decode(path, data)
+    first = _decode(path, _first_line(data))
+    unterminated = not data.endswith((b"\n", b"\r"))
+    held = [data]       # released once pyarrow parsed the file; re-read for a diagnosis
+    del data
+
+    def text() -> str:
+        return _decode(path, held[0] if held[0] is not None
+                       else _read_bytes(path, "recording file", "check the path"))
     delim = next((d for d in (",", ";", "\t") if d in first), ",")
 
-    def reader() -> Any:
+    def reader(text: str) -> Any:
         return csv.reader(_stdio.StringIO(text, newline=""), delimiter=delim)
 
     def parse() -> tuple[list[list[str]], list[int]]:
         rows: list[list[str]] = []
         lines: list[int] = []
-        it = reader()
+        it = reader(text())
         seen_header = False
         try:
             for row in it:
@@ -139,12 +172,13 @@ def _read_csv(path: Path, data: bytes) -> checks.RawTable:
 
     header: list[str] = []
     try:
-        header = next(([c.strip() for c in row] for row in reader() if not _is_blank(row)), [])
+        header = next(([c.strip() for c in row] for row in reader(first)
+                       if not _is_blank(row)), [])
     except csv.Error as err:
         raise InputError(f"{path}: unreadable CSV header ({err}); fix the first line") from None
 
     def fetch(raw: checks.RawTable, names: list[str]) -> dict[str, np.ndarray]:
-        fast = _csv_fast(data, delim, names)
+        fast = _csv_fast(held, delim, names)
         if fast is not None:
             return fast
         rows = raw.rows or []
@@ -159,28 +193,51 @@ def _read_csv(path: Path, data: bytes) -> checks.RawTable:
                 cols[name] = checks.cells_to_float(raw, name, cells)
         return cols
 
-    return checks.RawTable(path, header, fetch, parse=parse,
-                           unterminated=not text.endswith(("\n", "\r")))
+    return checks.RawTable(path, header, fetch, parse=parse, unterminated=unterminated)
 
 
-def _csv_fast(data: bytes, delim: str, names: list[str]) -> dict[str, np.ndarray] | None:
-    """Strict C parse (pyarrow); None when anything is off, for the diagnostic path."""
+#: Bytes per block of the streaming CSV parse (pyarrow's own default is 1 MiB): whole-file
+#: parsing holds ~3x the columns in flight; blocks keep a 200 MB file near 2x its size.
+_CSV_BLOCK = 8 << 20
+
+
+def _csv_fast(held: list, delim: str, names: list[str]) -> dict[str, np.ndarray] | None:
+    """Strict C parse (pyarrow, streamed in blocks); None when anything is off.
+
+    ``held`` is a one-item list holding the file's bytes; they are released (the item
+    set to None) once parsed, before the columns are joined, so that the bytes, the
+    parsed blocks and the joined columns are never all held at once.
+    """
     import pyarrow as pa
     import pyarrow.csv as pacsv
 
+    pieces: dict[str, list[np.ndarray]] = {c: [] for c in names}
     try:
-        table = pacsv.read_csv(
-            pa.BufferReader(data), parse_options=pacsv.ParseOptions(delimiter=delim),
+        batches = pacsv.open_csv(
+            pa.BufferReader(held[0]), read_options=pacsv.ReadOptions(block_size=_CSV_BLOCK),
+            parse_options=pacsv.ParseOptions(delimiter=delim),
             convert_options=pacsv.ConvertOptions(
                 column_types={c: pa.float64() for c in names}, include_columns=names))
-        cols = {c: np.asarray(table.column(c).to_numpy(), dtype=float) for c in names}
+        for batch in batches:
+            for c in names:
+                pieces[c].append(batch.column(c).to_numpy(zero_copy_only=False))
     except pa.ArrowCancelled:
         # pyarrow turns Ctrl-C during the parse into ArrowCancelled: an interrupt
         raise KeyboardInterrupt from None
     except Exception:  # noqa: BLE001 - any doubt: the csv-module path diagnoses it
         return None
-    if table.num_rows == 0 or not all(np.isfinite(v).all() for v in cols.values()):
+    good = sum(p.size for p in pieces[names[0]]) > 0 and all(
+        np.isfinite(p).all() for parts in pieces.values() for p in parts)
+    if not good:
         return None
+    held[0] = None
+    del batches
+    cols = {}
+    for c in names:
+        parts = pieces.pop(c)
+        cols[c] = np.concatenate(parts) if parts else np.empty(0)
+        del parts
+    pa.default_memory_pool().release_unused()     # the blocks' memory back to the system
     return cols
 
 
@@ -299,7 +356,7 @@ def read_recording(path: str | os.PathLike, meta: Any = None,
                          "file (rec.csv, .parquet or .npz)")
     fmt = _format_of(path)
     data = _read_bytes(path, "recording file", "check the path")
-    if not data.strip() or data.strip() == b"\xef\xbb\xbf":
+    if _blank(data):
         raise InputError(f"{path}: empty file; copy/export the recording again")
     metadata = read_metadata(meta, recording=path)
     if fmt in LAB_FORMATS:
@@ -312,6 +369,7 @@ def read_recording(path: str | os.PathLike, meta: Any = None,
             from .io_lab import map_columns
 
             raw = map_columns(raw, channels)
+    del data            # the reader keeps what it needs (a CSV's bytes only until parsed)
     cols = checks.pick_columns(raw)
     by_name = raw.fetch(raw, list(cols.values()))
     values = {sig: by_name[col] for sig, col in cols.items()}

@@ -242,20 +242,36 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
     first += (first < n) & (first > 0) & (tr[np.clip(first - 1, 0, n - 1)] > ti)
     S = np.cumsum(np.bincount(first, weights=dv, minlength=n + 1)[:n])
     SdT = np.cumsum(np.bincount(first, weights=dv * ti, minlength=n + 1)[:n])
-    X_raw = X_s + S * tr - SdT
+    # (full-length arrays are combined in place and dropped when done: a long record
+    # holds millions of samples per array)
+    X_raw = S * tr
+    X_raw += X_s                     # the operations and their order of X_s + S tr - SdT
+    X_raw -= SdT
+    del SdT
     xl = np.asarray(rec.x, dtype=float)
     okx = np.isfinite(xl)
     if not okx.any():
         raise InputError(f"{rec.name}: column 'x' has no finite value; the laser "
                          "displacement is needed to reconstruct the motion")
-    e = np.where(okx, xl - X_raw, 0.0)
+    e = np.subtract(xl, X_raw, out=np.zeros(n), where=okx)
     D, Dd = _drift(tr, e, okx, fs, drift_window)
-    x_f = X_raw + D
-    v_f = V_s + S + Dd
+    del e
+    x_f = X_raw
+    x_f += D
+    del X_raw
+    VD = V_s + Dd                    # the LO velocity between the jumps
+    v_f = V_s + S
+    v_f += Dd
+    del S
     xl_f = fill_gaps(xl, ~okx) if not okx.all() else xl
     v_disp = _gradient(xl_f, dt)
-    resid = (xl - x_f)[okx]
-    position_noise = max(robust_std(resid[:: max(1, resid.size // 8192)]), 1e-9)
+    if okx.all():
+        step = max(1, n // 8192)
+        resid = xl[::step] - x_f[::step]
+    else:
+        resid = (xl - x_f)[okx]
+        resid = resid[:: max(1, resid.size // 8192)]
+    position_noise = max(robust_std(resid), 1e-9)
 
     # ---- states at the impacts
     k = np.clip(np.searchsorted(tr, ti, side="right") - 1, 0, n - 2)
@@ -264,11 +280,12 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
     before = cdv[:-1]                                          # jumps strictly before
     x_imp = lin(X_s) + before * ti - cdvt[:-1] + lin(D)
     v_minus = lin(V_s) + before + lin(Dd)
+    del X_s, D, V_s, Dd
     v_plus = v_minus + dv
     y_imp = x_imp + side * b
 
     def lo_velocity(tq):
-        return np.interp(tq - t[0], tr, V_s + Dd) + cdv[np.searchsorted(ti, tq - t[0])]
+        return np.interp(tq - t[0], tr, VD) + cdv[np.searchsorted(ti, tq - t[0])]
 
     def lo_acc(tq):
         return np.interp(tq - t[0], tr, det.baseline)
