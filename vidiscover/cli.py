@@ -220,7 +220,11 @@ class LazyGroup(click.Group):
             sys.exit(130)
         finally:
             os.environ.pop(INTERRUPTED_ENV, None)
-            if previous is not None:
+            if interrupted:
+                # exiting: a Ctrl-C a library held back and forwards late (pyarrow's
+                # handler does) must not turn exit status 130 into death by SIGINT
+                signal.signal(signal.SIGINT, signal.SIG_IGN)
+            elif previous is not None:
                 signal.signal(signal.SIGINT, previous)
         if interrupted:                        # a library swallowed the KeyboardInterrupt
             click.echo("vidiscover: interrupted; no output was written", err=True)

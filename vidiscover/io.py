@@ -211,6 +211,10 @@ def _csv_fast(held: list, delim: str, names: list[str]) -> dict[str, np.ndarray]
     import pyarrow as pa
     import pyarrow.csv as pacsv
 
+    # pyarrow's own Ctrl-C handler (set for the duration of a read) re-delivers the
+    # signal later, after the command reported the interrupt (exit by SIGINT instead of
+    # 130); the blocks are read in a Python loop that our handler interrupts anyway.
+    pa.enable_signal_handlers(False)
     pieces: dict[str, list[np.ndarray]] = {c: [] for c in names}
     try:
         batches = pacsv.open_csv(
