@@ -74,7 +74,12 @@ def test_human_output(runner, recs, tmp_path):
                                    "--no-figures"]))
     n = json.loads((out / "summary.json").read_text())["impacts"]["n"]
     assert re.search(rf"^b9: {n} impacts \(\d+ right, \d+ left\)", res.stdout, flags=re.M)
-    assert re.search(r"r right RMS 0\.8\d\d \[0\.\d+, 0\.\d+\] \(n = \d+\)", res.stdout)
+    # the interval printed with the decimals two digits of its half-width carry, the
+    # value with as many (it printed "0.878 [0.878, 0.878]")
+    m = re.search(r"r right RMS (0\.8\d+) \[(0\.\d+), (0\.\d+)\] \(n = \d+\)", res.stdout)
+    assert m and len({len(g) for g in m.groups()}) == 1
+    value, lo, hi = (float(g) for g in m.groups())
+    assert lo < value < hi and 10 <= (hi - lo) / 2 * 10 ** (len(m.group(1)) - 2) < 100
     assert "regime:" in res.stdout and str(out) in res.stdout
     assert not (out / "figures").exists()
 

@@ -195,11 +195,14 @@ def run_analyze(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
 
 
 def _ci(w: dict) -> str:
+    from ..report.html import interval_text
+
     if w.get("rms") is None:
         return "no usable impact"
     lo, hi = w.get("ci_low"), w.get("ci_high")
-    ci = f" [{lo:.3f}, {hi:.3f}]" if lo is not None and hi is not None else ""
-    return f"{w['rms']:.3f}{ci} (n = {w['n']})"
+    if lo is None or hi is None or not hi > lo:
+        return f"{w['rms']:.3f} (n = {w['n']})"
+    return f"{interval_text(w['rms'], lo, hi)} (n = {w['n']})"
 
 
 def human_lines(doc: dict) -> list[str]:

@@ -63,18 +63,6 @@ def _top_level(files: list[str]) -> list[str]:
     return out
 
 
-def _decimals(ci) -> int | None:
-    """Decimals that an interval carries: two significant digits of its half-width."""
-    import math
-
-    if not ci or ci[0] is None or ci[1] is None:
-        return None
-    half = 0.5 * abs(ci[1] - ci[0])
-    if not (math.isfinite(half) and half > 0):
-        return None
-    return max(0, 1 - int(math.floor(math.log10(half))))
-
-
 def param_text(params: dict, cis: dict | None = None) -> str:
     """``key = value [low, high]`` per fitted parameter, as many digits as it carries.
 
@@ -82,17 +70,17 @@ def param_text(params: dict, cis: dict | None = None) -> str:
     interval's half-width; one without, to 3 significant digits (restitution-law
     specs as they are).
     """
+    from ..report.html import interval_text
+
     out = []
     for k, v in params.items():
         ci = (cis or {}).get(k)
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             out.append(f"{k} = {v}")
-            continue
-        d = _decimals(ci)
-        if d is None:
-            out.append(f"{k} = {v:.3g}")
+        elif ci and ci[0] is not None and ci[1] is not None and ci[1] > ci[0]:
+            out.append(f"{k} = {interval_text(v, ci[0], ci[1])}")
         else:
-            out.append(f"{k} = {v:.{d}f} [{ci[0]:.{d}f}, {ci[1]:.{d}f}]")
+            out.append(f"{k} = {v:.3g}")
     return "; ".join(out)
 
 
