@@ -330,6 +330,23 @@ def flight_law_mu_theta(result: FlightLawResult) -> tuple[float, float]:
     return max(float(result.mu), 0.0), float(result.theta_deg)
 
 
+#: The fix most reasons of a flight law that is not identified share.
+_POOL = "; pool recordings at several clearances"
+
+
+def _join_reasons(reasons: list[str]) -> str:
+    """The reasons in one line, their shared fix said once, at the end.
+
+    Examples
+    --------
+    >>> _join_reasons(["a; pool recordings at several clearances", "b",
+    ...                "c; pool recordings at several clearances"])
+    'a; b; c; pool recordings at several clearances'
+    """
+    pooled = any(r.endswith(_POOL) for r in reasons)
+    return "; ".join(r.removesuffix(_POOL) for r in reasons) + (_POOL if pooled else "")
+
+
 def _equation(terms, coefs) -> str:
     if not terms:
         return "y'' = 0"
@@ -899,6 +916,7 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
         return FlightLawResult(mu=math.nan, theta_deg=math.nan, terms=[], coefficients=[],
                                mu_ci=(math.nan, math.nan), theta_ci=(math.nan, math.nan),
                                equation="not identified", identified=False,
-                               reason="; ".join(reasons), warnings=tuple(reasons), **common)
+                               reason=_join_reasons(reasons), warnings=tuple(reasons),
+                               **common)
     return FlightLawResult(mu=mu, theta_deg=theta, terms=kept, coefficients=kc, mu_ci=mu_ci,
                            theta_ci=theta_ci, equation=equation, **common)
