@@ -44,14 +44,16 @@ def _proba_text(proba: dict) -> str:
                                  "the model shipped with vidiscover).")
 @channels_option
 @click.option("--json", "as_json", is_flag=True,
-              help="Print a JSON list of {file, label, proba, warnings}.")
+              help="Print a JSON list of {file, label, method, proba, warnings}.")
 @handle_errors
 def classify(recordings, meta, model_path, channels, as_json):
     """Label recordings by regime, with class probabilities.
 
     Every recording is analysed from its sensor data alone (impacts, return map,
-    LO response) and labelled by the regime classifier; a warning is printed when
-    a recording lies outside the classifier's training domain.
+    LO response) and labelled by the regime classifier, or by the label rules below
+    where the model keeps them (the labels for which the rules beat the classifier
+    in training); each result says which method labelled it. A warning names the
+    feature or rig ratio that lies outside the classifier's training domain.
 
     \b
     Labels (ipc: impacts per forcing cycle, after the transient):
@@ -75,8 +77,8 @@ def classify(recordings, meta, model_path, channels, as_json):
         for w in r["warnings"]:
             click.echo(f"vidiscover: warning: {r['file']}: outside the training domain "
                        f"({w}); the label may be unreliable", err=True)
-    human = "\n".join(f"{r['file']}: {r['label']} ({_proba_text(r['proba'])})"
-                      for r in results)
+    human = "\n".join(f"{r['file']}: {r['label']} [{r['method']}] "
+                      f"(classifier: {_proba_text(r['proba'])})" for r in results)
     emit(as_json, results, human)
 
 
@@ -89,7 +91,16 @@ def classify(recordings, meta, model_path, channels, as_json):
 @click.option("--n", "n", type=int, default=2500, show_default=True,
               help="Random training cases (rare labels get targeted cases on top).")
 @click.option("--n-test", type=int, default=800, show_default=True,
-              help="Random held-out test cases (0: no evaluation).")
+              help="Random held-out test cases of each simulated test set (0: none).")
+@click.option("--n-realism", type=int, default=0, show_default=True,
+              help="Random training cases of other rigs, compliant walls and instrument "
+                   "chains, drawn as the realism corpus draws them.")
+@click.option("--n-corpus-train", type=int, default=0, show_default=True,
+              help="Realism-corpus dev cases analysed as a user's recordings (pulse "
+                   "learned; a few seconds each) added to the training set (0: none).")
+@click.option("--n-corpus-test", type=int, default=0, show_default=True,
+              help="Realism-corpus test cases analysed as a user's recordings (pulse "
+                   "learned; a few seconds each) to score on (0: none).")
 @click.option("--scheduler", default=None, metavar="ADDRESS",
               help="Simulate on a Dask distributed cluster, e.g. tcp://host:8786 "
                    "(default: joblib processes on this machine).")
@@ -97,7 +108,8 @@ def classify(recordings, meta, model_path, channels, as_json):
               help="Worker processes without --scheduler (default: all cores; 1: serial).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document.")
 @handle_errors
-def train(out, seed, n, n_test, scheduler, n_jobs, as_json):
+def train(out, seed, n, n_test, n_realism, n_corpus_train, n_corpus_test, scheduler, n_jobs,
+          as_json):
     """Simulate a sweep, train and evaluate the regime classifier.
 
     Random rigs (clearance, base amplitude and frequency, mass ratio, restitution
@@ -105,7 +117,8 @@ def train(out, seed, n, n_test, scheduler, n_jobs, as_json):
     recorded and analysed; the classifier learns their true regime from the
     features of the recordings and is scored on a held-out sweep simulated with
     other seeds (balanced accuracy, recall per label, confusion table), beside the
-    rule-based baseline.
+    rule-based baseline. The model keeps the rules' label for the labels where the
+    rules beat the classifier out of fold (``rule_labels`` in the report).
     """
     import time
 
@@ -114,13 +127,18 @@ def train(out, seed, n, n_test, scheduler, n_jobs, as_json):
     from ..regimes.classifier import train as run_train
 
     out = _check_model_out(out)
-    if n < 1 or n_test < 0:
-        raise InputError(f"--n must be >= 1 and --n-test >= 0, were {n} and {n_test}")
+    if n < 1 or min(n_test, n_realism, n_corpus_train, n_corpus_test) < 0:
+        raise InputError(f"--n must be >= 1 and --n-test, --n-realism, --n-corpus-train, "
+                         f"--n-corpus-test >= 0, were {n}, {n_test}, {n_realism}, "
+                         f"{n_corpus_train}, {n_corpus_test}")
     t0 = time.perf_counter()
-    model, report = run_train(n, seed, n_test=n_test, n_jobs=n_jobs, scheduler=scheduler,
-                              progress=not as_json)
+    model, report = run_train(n, seed, n_test=n_test, n_realism=n_realism,
+                              n_corpus_train=n_corpus_train, n_corpus_test=n_corpus_test,
+                              n_jobs=n_jobs, scheduler=scheduler, progress=not as_json)
     report["seconds"] = round(time.perf_counter() - t0, 1)
     report["command"] = (f"vidiscover train --seed {seed} --n {n} --n-test {n_test} "
+                         f"--n-realism {n_realism} --n-corpus-train {n_corpus_train} "
+                         f"--n-corpus-test {n_corpus_test} "
                          f"--out {out}")
     model.metadata["command"] = report["command"]
     meta_path = out.with_suffix(".json")

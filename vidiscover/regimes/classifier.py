@@ -49,7 +49,7 @@ EXCLUDED_FEATURES: tuple[str, ...] = ("n_impacts",)
 #: The shipped model and its training settings (``vidiscover train --seed 0 --n 2500
 #: --n-test 800 --out vidiscover/data/regime_model.skops`` reproduces it).
 DEFAULT_MODEL = "regime_model.skops"
-DEFAULT_SEED, DEFAULT_N_TRAIN, DEFAULT_N_TEST = 0, 2500, 800
+DEFAULT_SEED, DEFAULT_N_TRAIN, DEFAULT_N_TEST, DEFAULT_N_REALISM = 0, 2500, 800, 0
 #: Seed offset of the held-out test set (other seeds and draws than training).
 TEST_SEED_OFFSET = 100_003
 
@@ -75,10 +75,16 @@ TRUSTED_TYPES: tuple[str, ...] = (
 
 
 def model_features() -> list[str]:
-    """Names of the registered features the model uses, in registry order."""
-    from ..analysis.returnmap import FEATURES
+    """Names of the features the model uses: the analysis's and the regime features.
 
-    return [n for n in FEATURES if n not in EXCLUDED_FEATURES]
+    Taken from the explicit set :data:`vidiscover.regimes.features.ALL_FEATURES`, not
+    from whatever happens to be registered in the calling process (a training run
+    whose cases were analysed in worker processes once fitted on the analysis's
+    features alone).
+    """
+    from .features import ALL_FEATURES
+
+    return [n for n in ALL_FEATURES if n not in EXCLUDED_FEATURES]
 
 
 # --------------------------------------------------------------------------- estimator
@@ -272,11 +278,18 @@ class Classification:
     label : str
         Most probable regime.
     proba : dict
-        Probability of every label of :data:`LABELS` (0 for labels never trained).
+        Probability of every label of :data:`LABELS` (0 for labels never trained):
+        the classifier's calibrated probabilities, or, when the rules gave the label,
+        the share of each true label among the training recordings to which the
+        rules gave it (out of fold; :attr:`RegimeModel.rule_proba`).
     warnings : tuple of str
         Why the recording may lie outside the training domain.
     features : dict
         The features the label was computed from.
+    method : str
+        Which method labelled the recording: ``"classifier"`` or ``"rules"`` (the
+        rule baseline, kept for the labels where it beats the classifier; see
+        :attr:`RegimeModel.rule_labels`).
     """
 
     file: str
@@ -284,11 +297,12 @@ class Classification:
     proba: dict
     warnings: tuple = ()
     features: dict = field(default_factory=dict, repr=False)
+    method: str = "classifier"
 
     def to_dict(self) -> dict:
-        """``{file, label, proba, warnings}`` (JSON-ready)."""
-        return {"file": self.file, "label": self.label, "proba": dict(self.proba),
-                "warnings": list(self.warnings)}
+        """``{file, label, method, proba, warnings}`` (JSON-ready)."""
+        return {"file": self.file, "label": self.label, "method": self.method,
+                "proba": dict(self.proba), "warnings": list(self.warnings)}
 
 
 @dataclass(frozen=True, eq=False)
@@ -301,20 +315,32 @@ class RegimeModel:
     feature_names : tuple of str
         Feature columns, in the classifier's order.
     param_ranges : dict
-        Parameter ranges of the training sweep (name -> (low, high)).
+        Rig ranges of the training sweep (name -> (low, high)): ``mass_ratio``
+        (m2 / m1), ``drive_ratio`` (forcing over natural frequency),
+        ``record_periods`` (record length in forcing periods) and ``b`` (m).
     metadata : dict
         Training settings and scores.
     rule_inputs : bool
         Give the classifier the rule baseline's label (one-hot) as extra inputs
-        besides the features: the trees learn where the rules hold and where the
-        detected features mislead them.
+        besides the features (off: the classifier learns from the features alone,
+        so that it can be compared with the rules; kept for old model files).
+    rule_labels : tuple of str
+        Labels the rule baseline keeps: when the rules name one of them, that is
+        the label (``method`` "rules"); every other recording gets the classifier's
+        label. Chosen in training where the rules' label was right more often than
+        the classifier's on the recordings the rules gave it (out-of-fold).
+    rule_proba : dict
+        For each of :attr:`rule_labels`, the share of every true label among the
+        training recordings the rules gave it: the probabilities reported with it.
     """
 
     classifier: RegimeClassifier
     feature_names: tuple
     param_ranges: Mapping = field(default_factory=dict)
     metadata: Mapping = field(default_factory=dict)
-    rule_inputs: bool = True
+    rule_inputs: bool = False
+    rule_labels: tuple = ()
+    rule_proba: Mapping = field(default_factory=dict)
 
     def matrix(self, features) -> np.ndarray:
         """Feature matrix of a DataFrame or of a list of feature dicts.
@@ -344,8 +370,20 @@ class RegimeModel:
         return list(self.feature_names) + extra
 
     def predict(self, features) -> np.ndarray:
-        """Labels of a DataFrame / list of feature dicts."""
+        """The classifier's labels of a DataFrame / list of feature dicts."""
         return self.classifier.predict(self.matrix(features))
+
+    def decide(self, features) -> tuple[np.ndarray, np.ndarray]:
+        """Labels as :meth:`classify` gives them, and the method of each.
+
+        The rule baseline's label where it is one of :attr:`rule_labels`, the
+        classifier's elsewhere.
+        """
+        clf = self.predict(features).astype(object)
+        rules = RuleBaseline().predict(_rule_frame(features))
+        keep = np.isin(rules, list(self.rule_labels))
+        return (np.where(keep, rules, clf).astype(object),
+                np.where(keep, "rules", "classifier").astype(object))
 
     def predict_proba(self, features) -> pd.DataFrame:
         """Probabilities of every label of :data:`LABELS`, one row per case."""
@@ -361,40 +399,46 @@ class RegimeModel:
         out = []
         x = self.matrix([features])
         bad = self.classifier.outside_domain(x)[0]
-        if bad:
-            names = ", ".join(self.column_names[i] for i in bad[:5])
-            out.append(f"features outside the training range: {names}")
+        clf = self.classifier
+        for i in bad[:5]:
+            out.append(f"feature {self.column_names[i]} = {x[0, i]:.4g} outside the "
+                       f"training range [{clf.feature_low_[i]:.4g}, "
+                       f"{clf.feature_high_[i]:.4g}]")
         if meta is not None:
-            vals = {"b": meta.b, "amplitude": meta.amplitude, "frequency": meta.frequency,
-                    "mass_ratio": meta.m2 / meta.m1}
+            vals = {"b": meta.b, "mass_ratio": meta.m2 / meta.m1,
+                    "drive_ratio": meta.frequency / (math.sqrt(meta.k1 / meta.m1) / (2 * math.pi))}
             for k, v in vals.items():
                 lo, hi = self.param_ranges.get(k, (-math.inf, math.inf))
                 if not lo * 0.95 <= v <= hi * 1.05:
                     out.append(f"{k} = {v:.4g} outside the training range "
                                f"[{lo:.4g}, {hi:.4g}]")
-        d0 = self.metadata.get("duration")
-        if duration is not None and d0 and not 0.5 * d0 <= duration <= 2 * d0:
-            out.append(f"record length {duration:.3g} s far from the training length "
-                       f"{d0:.3g} s")
+            lo, hi = self.param_ranges.get("record_periods", (0.0, math.inf))
+            if duration is not None and not 0.5 * lo <= duration * meta.frequency <= 2 * hi:
+                out.append(f"record length {duration * meta.frequency:.3g} forcing periods "
+                           f"far from the training lengths {lo:.3g}-{hi:.3g}")
         return out
 
     def classify_analysis(self, analysis, file: str | None = None) -> Classification:
         """Label an :class:`~vidiscover.analysis.AnalysisResult`."""
         from ..analysis.returnmap import compute_features
         from .dataset import feature_context
+        from .features import ALL_FEATURES  # noqa: F401 - registers the regime features
 
         feats = dict(analysis.features)
         missing = [n for n in self.feature_names if n not in feats]
         if missing:
             feats.update(compute_features(feature_context(analysis), missing))
         proba = self.predict_proba([feats]).iloc[0]
-        label = str(proba.idxmax())
+        label, method = (str(v[0]) for v in self.decide([feats]))
+        if method == "rules" and label in self.rule_proba:
+            proba = pd.Series({lab: float(self.rule_proba[label].get(lab, 0.0))
+                               for lab in LABELS})
         rec = analysis.recording
         warn = self.domain_warnings(feats, rec.meta if rec is not None else None,
                                     analysis.detection.duration)
         return Classification(file=file or analysis.name, label=label,
                               proba={k: float(v) for k, v in proba.items()},
-                              warnings=tuple(warn), features=feats)
+                              warnings=tuple(warn), features=feats, method=method)
 
     def classify(self, rec, file: str | None = None) -> Classification:
         """Analyse (stages 1-4) and label a :class:`~vidiscover.recording.Recording`."""
@@ -405,7 +449,7 @@ class RegimeModel:
     def __call__(self, analysis) -> dict:
         """``{label, proba}`` of an analysis (the ``classify`` hook of sweeps)."""
         c = self.classify_analysis(analysis)
-        return {"label": c.label, "proba": c.proba}
+        return {"label": c.label, "method": c.method, "proba": c.proba}
 
 
 # --------------------------------------------------------------------------- train/eval
@@ -442,35 +486,145 @@ def evaluate(model: RegimeModel, data: pd.DataFrame, baseline: RuleBaseline | No
     """
     y = data["label"].to_numpy(object)
     out = _scores(y, model.predict(data))
-    feats = pd.DataFrame({n: data[f"feature:{n}"] for n in RuleBaseline.FEATURES})
-    out["baseline"] = _scores(y, (baseline or RuleBaseline()).predict(feats))
+    out["baseline"] = _scores(y, (baseline or RuleBaseline()).predict(_rule_frame(data)))
+    labels, methods = model.decide(data)
+    out["classify"] = _scores(y, labels)
+    out["classify"]["rules_share"] = float(np.mean(methods == "rules")) if len(y) else 0.0
     return out
 
 
+def _rule_frame(features) -> pd.DataFrame:
+    """The rule baseline's features of a DataFrame (``NAME`` or ``feature:NAME``) or dicts."""
+    if not isinstance(features, pd.DataFrame):
+        features = pd.DataFrame(list(features))
+    cols = {}
+    for n in RuleBaseline.FEATURES:
+        key = n if n in features else f"feature:{n}"
+        cols[n] = (features[key].to_numpy(float) if key in features
+                   else np.full(len(features), np.nan))
+    return pd.DataFrame(cols)
+
+
+def choose_rule_labels(y, clf_pred, rule_pred, min_cases: int = 5, groups=None
+                       ) -> tuple[str, ...]:
+    """Labels for which the rules beat the classifier.
+
+    For every label ``L``, on the recordings to which the rules give ``L``, the
+    rules' label is kept when it is right at least as often as the classifier's
+    (ties go to the rules, the simpler method) and right in more than half of
+    them -- in every group (e.g. the paper's rig, other rigs, recordings analysed
+    as a user's) where the rules give ``L`` to at least ``min_cases`` recordings,
+    and there must be one such group.
+    """
+    y, clf_pred, rule_pred = (np.asarray(v, dtype=object) for v in (y, clf_pred, rule_pred))
+    groups = np.zeros(len(y), dtype=object) if groups is None else np.asarray(groups, object)
+    out = []
+    for lab in LABELS:
+        verdicts = []
+        for g in dict.fromkeys(groups):
+            m = (rule_pred == lab) & (groups == g)
+            if m.sum() >= min_cases:
+                hit = (y[m] == lab).mean()
+                verdicts.append(hit > 0.5 and hit >= (clf_pred[m] == y[m]).mean())
+        if verdicts and all(verdicts):
+            out.append(lab)
+    return tuple(out)
+
+
+def _groups(data: pd.DataFrame) -> np.ndarray:
+    """Origin of every training row: the paper's rig, other rigs, or a corpus case."""
+    origin = (data["param:origin"].astype(str).to_numpy(object) if "param:origin" in data
+              else np.full(len(data), "random", dtype=object))
+    k1 = (data["param:k1"].to_numpy(float) if "param:k1" in data
+          else np.zeros(len(data)))
+    other = np.nan_to_num(k1) > 0
+    return np.where(origin == "corpus_dev", "corpus_dev",
+                    np.where(other, "other_rigs", "paper_rig")).astype(object)
+
+
 def fit_model(data: pd.DataFrame, *, random_state: int = 0, metadata: Mapping | None = None,
-              rule_inputs: bool = True, **params) -> RegimeModel:
+              rule_inputs: bool = False, **params) -> RegimeModel:
     """Fit a :class:`RegimeModel` on a labelled set (``feature:NAME`` columns)."""
-    from .dataset import PARAM_RANGES
+    from .dataset import DOMAIN
 
     names = tuple(model_features())
     model = RegimeModel(RegimeClassifier(random_state=random_state, **params), names,
-                        {k: tuple(v) for k, v in PARAM_RANGES.items()}, dict(metadata or {}),
+                        {k: tuple(v) for k, v in DOMAIN.items()}, dict(metadata or {}),
                         rule_inputs)
     model.classifier.fit(model.matrix(data), data["label"].to_numpy(object).astype(str))
     return model
 
 
+def fit_with_gate(data: pd.DataFrame, *, random_state: int = 0, metadata: Mapping | None = None,
+                  folds: int = 3, **params) -> tuple[RegimeModel, dict]:
+    """Fit a :class:`RegimeModel` and choose its :attr:`~RegimeModel.rule_labels`.
+
+    Out-of-fold predictions of the classifier (``folds`` stratified folds) are set
+    beside the rules' labels on the training set, in each group of rows (the
+    paper's rig, other rigs and instruments, realism-corpus recordings analysed
+    as a user's; :func:`choose_rule_labels`).
+
+    Returns
+    -------
+    model : RegimeModel
+    oof : dict
+        Out-of-fold scores of the classifier and of the rules, and the chosen labels.
+    """
+    from dataclasses import replace
+
+    from sklearn.model_selection import StratifiedKFold
+
+    y = data["label"].to_numpy(object).astype(str)
+    oof = np.empty(len(y), dtype=object)
+    counts = pd.Series(y).value_counts()
+    k = int(min(folds, counts.min())) if len(counts) > 1 else 0
+    model = fit_model(data, random_state=random_state, metadata=metadata, **params)
+    rules = RuleBaseline().predict(_rule_frame(data))
+    if k < 2:
+        return model, {}
+    for tr, te in StratifiedKFold(k, shuffle=True, random_state=random_state).split(y, y):
+        part = fit_model(data.iloc[tr], random_state=random_state, **params)
+        oof[te] = part.predict(data.iloc[te])
+    groups = _groups(data)
+    chosen = choose_rule_labels(y, oof, rules, groups=groups)
+    rule_proba = {lab: {k: float(np.mean(y[rules == lab] == k)) for k in LABELS}
+                  for lab in chosen}
+    report = {"rule_labels": list(chosen), "rule_proba": rule_proba, "folds": k,
+              "groups": {}}
+    for g in dict.fromkeys(groups):
+        m = groups == g
+        report["groups"][str(g)] = {"n": int(m.sum()), "classifier": _scores(y[m], oof[m]),
+                                    "rules": _scores(y[m], rules[m])}
+    return replace(model, rule_labels=chosen, rule_proba=rule_proba), report
+
+
 def train(n: int = DEFAULT_N_TRAIN, seed: int = DEFAULT_SEED, *, n_test: int = DEFAULT_N_TEST,
+          n_realism: int = DEFAULT_N_REALISM, n_corpus_train: int = 0, n_corpus_test: int = 0,
           n_jobs: int | None = 1, scheduler=None, progress: bool = False
           ) -> tuple[RegimeModel, dict]:
-    """Simulate a training sweep, fit the classifier, evaluate on a held-out sweep.
+    """Simulate a training sweep, fit the classifier, evaluate on held-out sets.
 
     Parameters
     ----------
-    n, n_test : int
-        Random cases of the training and the test sets (plus targeted draws).
+    n : int
+        Random training cases at the paper's rig (exact engine, default sensors),
+        plus targeted draws for rare labels.
     seed : int
-        Seed of the training set; the test set uses ``seed + 100003``.
+        Seed of the training set; the test sets use ``seed + 100003``.
+    n_test : int
+        Random cases of each simulated held-out set: the paper's rig (exact engine),
+        and other rigs and instrument chains (as ``n_realism``).
+    n_realism : int
+        Random training cases of other rigs, compliant or exact walls and drawn
+        instrument chains (:func:`vidiscover.regimes.dataset.draw_realism_cases`).
+    n_corpus_train : int
+        Cases of the realism corpus's ``dev`` split analysed as a user's recordings
+        are (the pulse learned from each), added to the training set: they teach
+        the classifier, and the choice of the rules' labels, what a learned pulse
+        does to the features.
+    n_corpus_test : int
+        Cases of the realism corpus's ``test`` split (:mod:`vidiscover.corpus`)
+        analysed as a user's recordings are (the pulse learned from each); 0: none.
     n_jobs, scheduler, progress
         Passed to :func:`vidiscover.scale.parallel_map`.
 
@@ -478,34 +632,75 @@ def train(n: int = DEFAULT_N_TRAIN, seed: int = DEFAULT_SEED, *, n_test: int = D
     -------
     model : RegimeModel
     report : dict
-        :func:`evaluate` on the test set plus ``n_train``, ``train_labels``.
+        :func:`evaluate` on the paper-rig test set (top level), every set under
+        ``sets``, the out-of-fold comparison that chose the rules' labels under
+        ``gate``, plus ``n_train``, ``train_labels``.
     """
-    from .dataset import generate
+    from .dataset import corpus_set, generate
 
     kw = dict(n_jobs=n_jobs, scheduler=scheduler, progress=progress)
-    data = generate(n, seed, **kw)
-    test = generate(n_test, seed + TEST_SEED_OFFSET, **kw) if n_test else None
-    return _fit_and_report(data, test, seed=seed, n=n, n_test=n_test)
+    data = generate(n, seed, n_realism=n_realism, **kw)
+    if n_corpus_train:
+        dev = corpus_set("dev", n_corpus_train, **kw).assign(**{"param:origin": "corpus_dev"})
+        data = pd.concat([data, dev], ignore_index=True)
+    tests = {}
+    if n_test:
+        tests["exact_paper_rig"] = generate(n_test, seed + TEST_SEED_OFFSET, **kw)
+        if n_realism:
+            tests["other_rigs_instruments"] = generate(0, seed + TEST_SEED_OFFSET,
+                                                       n_realism=n_test, rounds=0, **kw)
+    if n_corpus_test:
+        tests["corpus_test"] = corpus_set("test", n_corpus_test, **kw)
+    return _fit_and_report(data, tests, seed=seed, n=n, n_test=n_test, n_realism=n_realism,
+                           n_corpus_train=n_corpus_train, n_corpus_test=n_corpus_test)
 
 
-def _fit_and_report(data: pd.DataFrame, test: pd.DataFrame | None, *, seed: int, n: int,
-                    n_test: int) -> tuple[RegimeModel, dict]:
+#: What the held-out sets of :func:`train` are.
+TEST_SETS: Mapping[str, str] = {
+    "exact_paper_rig": "exact engine, the paper's rig and sensors (pulse known)",
+    "other_rigs_instruments": "other rigs, compliant or exact walls, drawn instrument "
+                              "chains (pulse known)",
+    "corpus_test": "realism corpus test split: compliant walls, other rigs, instrument "
+                   "chains (pulse learned, as a user's recording)",
+    "independent": "recordings of an independent simulator (pulse learned)",
+}
+
+
+def _fit_and_report(data: pd.DataFrame, tests: Mapping[str, pd.DataFrame], *, seed: int,
+                    n: int, n_test: int, n_realism: int = 0, n_corpus_train: int = 0,
+                    n_corpus_test: int = 0) -> tuple[RegimeModel, dict]:
     """The fitting and scoring half of :func:`train`, on simulated sets."""
     import sklearn
 
-    meta = {"seed": seed, "n": n, "n_test": n_test, "n_train": len(data),
+    command = f"vidiscover train --seed {seed} --n {n} --n-test {n_test}"
+    command += (f" --n-realism {n_realism} --n-corpus-train {n_corpus_train}"
+                f" --n-corpus-test {n_corpus_test} --out MODEL")
+    meta = {"seed": seed, "n": n, "n_test": n_test, "n_realism": n_realism,
+            "n_corpus_train": n_corpus_train, "n_corpus_test": n_corpus_test,
+            "n_train": len(data),
             "train_labels": data["label"].value_counts().to_dict(),
-            "duration": float(data["param:duration"].iloc[0]),
-            "settle": float(data["param:settle"].iloc[0]),
-            "sklearn_version": sklearn.__version__,
-            "command": f"vidiscover train --seed {seed} --n {n} --n-test {n_test} --out MODEL"}
-    model = fit_model(data, random_state=seed, metadata=meta)
-    report = {"n_train": len(data), "train_labels": meta["train_labels"]}
-    if test is not None:
-        report.update(evaluate(model, test))
-        report["test_labels"] = test["label"].value_counts().to_dict()
+            "sklearn_version": sklearn.__version__, "command": command}
+    model, gate = fit_with_gate(data, random_state=seed, metadata=meta)
+    model.metadata["rule_labels"] = list(model.rule_labels)
+    report = {"n_train": len(data), "train_labels": meta["train_labels"], "gate": gate,
+              "sets": {}}
+    for name, test in tests.items():
+        if len(test):
+            rep = evaluate(model, test)
+            rep["test_labels"] = test["label"].value_counts().to_dict()
+            rep["description"] = TEST_SETS.get(name, name)
+            report["sets"][name] = rep
+    first = next(iter(report["sets"].values()), None)
+    if first is not None:
+        report.update({k: v for k, v in first.items() if k not in ("description",)})
         model.metadata.update({k: report[k] for k in ("balanced_accuracy", "recall")})
         model.metadata["baseline_balanced_accuracy"] = report["baseline"]["balanced_accuracy"]
+        model.metadata["scores"] = {
+            name: {m: {"balanced_accuracy": part["balanced_accuracy"],
+                       "recall": part["recall"]}
+                   for m, part in (("classifier", rep), ("rules", rep["baseline"]),
+                                   ("classify", rep["classify"]))}
+            for name, rep in report["sets"].items()}
     return model, report
 
 
@@ -523,7 +718,9 @@ def save_model(model: RegimeModel, path) -> Path:
              "param_ranges": {k: [float(a), float(b)] for k, (a, b) in
                               model.param_ranges.items()},
              "metadata": json.dumps(to_jsonable(model.metadata)),
-             "rule_inputs": bool(model.rule_inputs)}
+             "rule_inputs": bool(model.rule_inputs),
+             "rule_labels": [str(v) for v in model.rule_labels],
+             "rule_proba": json.dumps(to_jsonable(model.rule_proba))}
     write_group([(path, lambda tmp: tmp.write_bytes(
         sio.dumps(state, compression=zipfile.ZIP_DEFLATED, compresslevel=9)))])
     return path
@@ -559,7 +756,9 @@ def load_model(path) -> RegimeModel:
                          "train one with `vidiscover train --out MODEL`")
     return RegimeModel(state["classifier"], tuple(state["feature_names"]),
                        {k: tuple(v) for k, v in state["param_ranges"].items()},
-                       json.loads(state["metadata"]), bool(state.get("rule_inputs", False)))
+                       json.loads(state["metadata"]), bool(state.get("rule_inputs", False)),
+                       tuple(str(v) for v in state.get("rule_labels", ())),
+                       json.loads(state.get("rule_proba", "{}")))
 
 
 def load_default_model() -> RegimeModel:
@@ -569,23 +768,39 @@ def load_default_model() -> RegimeModel:
         return load_model(path)
 
 
-def format_report(report: Mapping) -> str:
-    """Text of an :func:`evaluate` report.
+def format_report(report: Mapping, confusion: bool = True) -> str:
+    """Text of an :func:`evaluate` report, or of every set of a :func:`train` report.
 
-    Balanced accuracy and recall per label of the classifier beside the rule
-    baseline, then both confusion tables.
+    Balanced accuracy and recall per label of the classifier, the rule baseline and
+    what ``classify`` gives (the classifier, or the rules for their labels) side by
+    side, then the confusion tables of the classifier and the rules.
     """
+    if "sets" in report and report["sets"]:
+        parts = []
+        for name, rep in report["sets"].items():
+            parts.append(f"== {name}: {rep.get('description', '')}")
+            parts.append(format_report(rep, confusion))
+        return "\n\n".join(parts)
     base = report["baseline"]
+    final = report.get("classify")
     labels = list(report["confusion"]["labels"])
     w = 22
-    lines = [f"held-out test set: {report['n']} recordings",
-             f"{'':{w}s}{'classifier':>12s}{'rules':>12s}",
+    head = f"{'':{w}s}{'classifier':>12s}{'rules':>12s}" + (f"{'classify':>12s}" if final else "")
+    lines = [f"held-out test set: {report['n']} recordings", head,
              f"{'balanced accuracy':{w}s}{report['balanced_accuracy']:12.3f}"
-             f"{base['balanced_accuracy']:12.3f}"]
+             f"{base['balanced_accuracy']:12.3f}"
+             + (f"{final['balanced_accuracy']:12.3f}" if final else "")]
     for lab in labels:
         if lab in report["recall"]:
-            lines.append(f"{'recall ' + lab:{w}s}{report['recall'][lab]:12.3f}"
-                         f"{base['recall'][lab]:12.3f}")
+            n_lab = int(np.asarray(report["confusion"]["matrix"])[labels.index(lab)].sum())
+            lines.append(f"{'recall ' + lab + f' ({n_lab})':{w}s}{report['recall'][lab]:12.3f}"
+                         f"{base['recall'][lab]:12.3f}"
+                         + (f"{final['recall'][lab]:12.3f}" if final else ""))
+    if final:
+        lines.append(f"classify used the rules for {100 * final['rules_share']:.0f} % of "
+                     "the recordings")
+    if not confusion:
+        return "\n".join(lines)
     for title, part in (("classifier", report), ("rule baseline", base)):
         m = np.asarray(part["confusion"]["matrix"])
         lines += ["", f"confusion ({title}; rows true, columns predicted)",

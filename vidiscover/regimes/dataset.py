@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, dataclass, field, replace
 
 import numpy as np
 import pandas as pd
@@ -28,8 +28,8 @@ import pandas as pd
 from ..errors import InputError
 from .labels import LABELS
 
-__all__ = ["PARAM_RANGES", "Case", "draw_cases", "simulate_case", "generate",
-           "feature_context", "M1"]
+__all__ = ["PARAM_RANGES", "Case", "draw_cases", "draw_realism_cases", "simulate_case",
+           "generate", "feature_context", "M1"]
 
 #: LO mass of every drawn rig (kg, the paper's); the ball mass follows the mass ratio.
 M1 = 4.168
@@ -48,6 +48,18 @@ PARAM_RANGES: Mapping[str, tuple[float, float]] = {
     "noise": (0.5, 3.0),
     "f_s": (120.0, 400.0),
     "zeta_s": (0.01, 0.05),
+}
+
+#: Ranges of the rigs of a training set (paper-rig draws and realism draws
+#: together): mass ratio m2 / m1, forcing over natural frequency, record length in
+#: forcing periods (dimensionless: another rig within them is in domain), and the
+#: half-clearance b (m; gravity and contact mechanics do not scale with it). A
+#: recording outside them is outside the training domain.
+DOMAIN: Mapping[str, tuple[float, float]] = {
+    "b": (0.003, 0.030),
+    "mass_ratio": (0.003, 0.05),
+    "drive_ratio": (0.7, 1.2),
+    "record_periods": (30.0, 52.0),
 }
 
 #: Boxes of targeted draws for labels that random draws rarely hit (subset of the
@@ -80,9 +92,20 @@ class Case:
     f_s, zeta_s : float
         Sheet resonance (Hz, damping ratio); ``f_s = 0`` switches it off.
     origin : str
-        "random", or "target:LABEL" for a targeted draw.
+        "random" (a draw over :data:`PARAM_RANGES` at the paper's rig), "realism" (a
+        rig, contact model and instrument chain drawn as the realism corpus draws
+        them), or "target:LABEL" for a targeted draw.
     settle, duration : float
         Simulated settling time and record length (s).
+    m1, k1, c1 : float
+        LO mass (kg), stiffness (N/m) and damping (N s/m); ``k1 = 0``: the paper's
+        stiffness and damping.
+    contact : tuple of str
+        Compliant walls (``--contact`` syntax, e.g. ``("right=kelvin-voigt:k=3e7,r=0.8",
+        "left=...")``); empty: the exact engine with ``r_right`` / ``r_left``.
+    sensors : dict or None
+        Fields of :class:`vidiscover.sensors.SensorConfig` (the instrument chain);
+        None: the default sensors with ``noise``, ``f_s`` and ``zeta_s``.
     """
 
     seed: int
@@ -100,19 +123,41 @@ class Case:
     origin: str = "random"
     settle: float = _SETTLE
     duration: float = _DURATION
+    m1: float = M1
+    k1: float = 0.0
+    c1: float = 0.0
+    contact: tuple = ()
+    sensors: dict | None = field(default=None, hash=False)
 
     def params(self):
         """:class:`~vidiscover.params.SystemParams` of the rig."""
-        from ..params import preset
+        from ..params import SystemParams, preset
 
+        if self.k1 > 0:
+            return SystemParams(m1=self.m1, c1=self.c1, k1=self.k1, m2=self.mass_ratio * self.m1,
+                                b=self.b, amplitude=self.amplitude, frequency=self.frequency,
+                                r=self.r_right)
         return preset("paper", b=self.b, amplitude=self.amplitude, frequency=self.frequency,
                       m1=M1, m2=self.mass_ratio * M1, r=self.r_right)
+
+    def sensor_config(self):
+        """The instrument chain (:class:`~vidiscover.sensors.SensorConfig`) or None."""
+        from ..sensors import SensorConfig
+
+        return SensorConfig(**self.sensors) if self.sensors else None
+
+    def contact_model(self):
+        """The compliant walls, or None for the exact engine."""
+        from ..simulation.contact import ContactModel
+
+        return ContactModel.parse(list(self.contact)) if self.contact else None
 
     def effects(self):
         """:class:`~vidiscover.effects.Effects` switched on for the rig."""
         from ..effects import Effects
 
-        items = [f"asymmetric_restitution={self.r_right!r},{self.r_left!r}"]
+        items = [] if self.contact else [
+            f"asymmetric_restitution={self.r_right!r},{self.r_left!r}"]
         if self.mu > 0:
             items.append(f"coulomb_friction={self.mu!r}")
         if self.theta != 0:
@@ -155,6 +200,7 @@ def _jitter(rng, case: Case, label: str, scale: float = 0.05) -> Case:
     mass ratio), clipped to the range.
     """
     new = {}
+    rig = case.k1 > 0
     for k in ("b", "amplitude", "frequency", "mass_ratio", "r_right", "r_left", "mu",
               "theta"):
         lo, hi = PARAM_RANGES[k]
@@ -162,16 +208,48 @@ def _jitter(rng, case: Case, label: str, scale: float = 0.05) -> Case:
         if k in ("mu", "theta") and v == 0:
             new[k] = 0.0
             continue
+        if rig and k in ("amplitude", "frequency", "mass_ratio"):
+            # another rig: keep its masses and frequency, move the base amplitude
+            # in proportion (the ranges of the paper's rig do not apply)
+            new[k] = v * math.exp(rng.normal(0, scale)) if k == "amplitude" else v
+            continue
         if k in _LOG_SCALE:
             v = math.exp(math.log(v) + rng.normal(0, scale) * math.log(hi / lo))
         else:
             v = v + rng.normal(0, scale) * (hi - lo)
         new[k] = float(min(max(v, lo), hi))
-    on = rng.random() < 0.5
+    on = rng.random() < 0.5 and case.sensors is None
     return replace(case, seed=int(rng.integers(2**31 - 1)), noise=_uniform(rng, "noise"),
                    f_s=_uniform(rng, "f_s") if on else 0.0,
                    zeta_s=_uniform(rng, "zeta_s") if on else 0.02,
                    origin=f"target:{label}", **new)
+
+
+def _realism_draw(rng, compliant: bool) -> Case:
+    """A rig and instrument chain drawn as the realism corpus draws them.
+
+    With ``compliant`` the walls are the drawn compliant contacts; otherwise the
+    exact engine with restitutions drawn over :data:`PARAM_RANGES`.
+    """
+    from ..corpus import draw_realism_case
+
+    rc = draw_realism_case(rng, "train", 0)
+    r_right, r_left = _uniform(rng, "r_right"), _uniform(rng, "r_left")
+    return Case(seed=rc.seed, b=rc.b, amplitude=rc.amplitude, frequency=rc.frequency,
+                mass_ratio=rc.m2 / rc.m1, r_right=r_right, r_left=r_left, mu=rc.mu,
+                theta=rc.theta, noise=1.0, f_s=0.0, origin="realism", settle=rc.settle,
+                duration=rc.duration, m1=rc.m1, k1=rc.k1, c1=rc.c1,
+                contact=tuple(rc.contact) if compliant else (), sensors=dict(rc.sensors))
+
+
+def draw_realism_cases(n: int, seed: int, compliant_share: float = 0.5) -> list[Case]:
+    """``n`` cases of other rigs, contact models and instrument chains from ``seed``.
+
+    A share ``compliant_share`` of them has compliant walls (the compliant-contact
+    engine), the others the exact engine; every one its own drawn instrument chain.
+    """
+    rng = np.random.default_rng([seed, 2])
+    return [_realism_draw(rng, rng.random() < compliant_share) for _ in range(n)]
 
 
 def draw_cases(n: int, seed: int) -> list[Case]:
@@ -220,11 +298,15 @@ def simulate_case(case: Case) -> dict:
 
     row = {f"param:{k}": v for k, v in case.to_dict().items()}
     try:
+        sensors = case.sensor_config()
         rec, truth, res = simulate_to_memory(case.params(), case.effects(), seed=case.seed,
                                              settle=case.settle, duration=case.duration,
-                                             noise=case.noise)
-        out = analyze(rec, n_boot=_N_BOOT, seed=case.seed,
-                      pulse=known_pulse(None, case.effects()))
+                                             noise=case.noise, sensors=sensors,
+                                             contact=case.contact_model())
+        pulse = known_pulse(sensors, case.effects()) if not case.contact else None
+        if pulse is None:
+            pulse = _training_pulse(sensors, truth)
+        out = analyze(rec, n_boot=_N_BOOT, seed=case.seed, pulse=pulse)
     except InputError as err:
         row.update(label=None, status=f"error: {err}")
         return row
@@ -238,6 +320,32 @@ def simulate_case(case: Case) -> dict:
     return row
 
 
+def _training_pulse(sensors, truth):
+    """The instrument's pulse for a training recording, told rather than learned.
+
+    Learning the pulse from every training recording would take seconds each; the
+    training sets are given the acquisition chain's pulse with the median true
+    contact duration and the mounted resonance (an approximation of a compliant
+    contact's shape). Held-out sets are analysed as a user's recording is: the pulse
+    learned from the recording.
+    """
+    from dataclasses import replace as dc_replace
+
+    from ..sensors import SensorConfig
+    from ..workflows import known_pulse
+
+    sensors = sensors if sensors is not None else SensorConfig()
+    base = known_pulse(dc_replace(sensors, mount_resonance=None))
+    imp = truth.impacts
+    dur = np.asarray(imp.t_out, float) - np.asarray(imp.t_in, float)
+    tau = float(np.median(dur)) if dur.size else 0.0
+    mount = (sensors.mount_resonance or 0.0) / sensors.sample_rate
+    kw = {"tau": tau}
+    if mount and base.kind != "linear-phase":
+        kw.update(mount=mount, mount_zeta=sensors.mount_zeta)
+    return dc_replace(base, **kw)
+
+
 def _run(cases, n_jobs, scheduler, progress, desc):
     from ..scale import parallel_map
 
@@ -245,16 +353,20 @@ def _run(cases, n_jobs, scheduler, progress, desc):
                         progress=progress, desc=desc)
 
 
-def generate(n: int, seed: int, *, min_per_label: int | None = None, rounds: int = 3,
-             n_jobs: int | None = 1, scheduler=None, progress: bool = False) -> pd.DataFrame:
+def generate(n: int, seed: int, *, n_realism: int = 0, min_per_label: int | None = None,
+             rounds: int = 3, n_jobs: int | None = 1, scheduler=None, progress: bool = False
+             ) -> pd.DataFrame:
     """Simulate a labelled set: ``n`` random cases, then targeted draws for rare labels.
 
     Parameters
     ----------
     n : int
-        Random cases.
+        Random cases at the paper's rig (exact engine, default sensors).
     seed : int
         Master seed (draws and per-case seeds derive from it).
+    n_realism : int
+        Random cases of other rigs, compliant or exact walls and drawn instrument
+        chains (:func:`draw_realism_cases`).
     min_per_label : int, optional
         Wanted cases per label (default ``max(4, n // 20)``); labels below it get
         targeted draws (at most ``2 * min_per_label`` per label and
@@ -270,10 +382,10 @@ def generate(n: int, seed: int, *, min_per_label: int | None = None, rounds: int
         One row per case that simulated and analysed cleanly (see
         :func:`simulate_case`).
     """
-    if not (isinstance(n, (int, np.integer)) and n >= 1):
+    if not (isinstance(n, (int, np.integer)) and n >= 0 and n + n_realism >= 1):
         raise InputError(f"n (number of cases) must be a positive integer, was {n!r}")
     rng = np.random.default_rng([seed, 1])
-    cases = draw_cases(int(n), seed)
+    cases = draw_cases(int(n), seed) + draw_realism_cases(int(n_realism), seed)
     rows = _run(cases, n_jobs, scheduler, progress, "random cases")
     want = max(4, n // 20) if min_per_label is None else int(min_per_label)
     cap = max(8, n // 4)
@@ -299,3 +411,57 @@ def generate(n: int, seed: int, *, min_per_label: int | None = None, rounds: int
 
 def _case_of(row: dict) -> Case:
     return Case(**{k.split(":", 1)[1]: v for k, v in row.items() if k.startswith("param:")})
+
+
+def recording_row(rec, label: str | None, name: str = "") -> dict:
+    """Analyse a recording as a user's (the pulse learned from it) into a labelled row.
+
+    Returns
+    -------
+    dict
+        ``name``, ``label`` (the given truth), ``status`` and ``feature:NAME`` for
+        every feature of :data:`~vidiscover.regimes.features.ALL_FEATURES`.
+    """
+    from ..analysis import analyze
+    from ..analysis.returnmap import compute_features
+    from .features import ALL_FEATURES
+
+    row = {"name": name or rec.name, "label": label}
+    try:
+        out = analyze(rec, n_boot=0)
+    except InputError as err:
+        row.update(status=f"error: {err}")
+        return row
+    feats = dict(out.features)
+    missing = [n for n in ALL_FEATURES if n not in feats]
+    if missing:
+        feats.update(compute_features(feature_context(out), missing))
+    row.update(status="ok", **{f"feature:{k}": v for k, v in feats.items()})
+    return row
+
+
+def _corpus_row(case) -> dict:
+    sim = case.simulate()
+    row = recording_row(sim.recording, sim.truth.label, case.name)
+    row.update({"param:m1": case.m1, "param:frequency": case.frequency,
+                "param:b": case.b, "param:compliant": True,
+                "param:anti_alias": case.sensors.get("anti_alias"),
+                "param:sample_rate": case.sensors.get("sample_rate")})
+    return row
+
+
+def corpus_set(split: str = "test", n: int | None = None, *, n_jobs: int | None = 1,
+               scheduler=None, progress: bool = False) -> pd.DataFrame:
+    """The realism corpus split ``split`` (first ``n`` cases) analysed as a user would.
+
+    Every case (compliant walls, other rigs, drawn instrument chains; see
+    :mod:`vidiscover.corpus`) is simulated, labelled from its true motion and
+    analysed with the pulse learned from the recording.
+    """
+    from ..corpus import realism_corpus
+    from ..scale import parallel_map
+
+    rows = parallel_map(_corpus_row, realism_corpus(split, n), scheduler=scheduler,
+                        n_jobs=n_jobs, progress=progress, desc=f"corpus {split}")
+    df = pd.DataFrame(rows)
+    return df[df["status"] == "ok"].reset_index(drop=True)

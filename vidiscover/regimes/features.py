@@ -11,7 +11,7 @@ float, NaN when undefined for the record.
   ``modal_count_share``, ``quiet_run`` (longest run of impact-free cycles);
 * impact timing: ``phase_coherence`` (impacts locked to the forcing phase),
   ``dt_max`` / ``dt_min`` (longest / shortest gap, in periods), ``side_run`` (longest
-  run of impacts on one wall);
+  run of impacts on one wall, per cycle);
 * return map: ``returnmap_top_share`` (points in the four largest clusters),
   ``returnmap_cluster_density`` (clusters per point);
 * LO response: ``waveform_period_error`` (the displacement over a cycle repeats
@@ -132,7 +132,11 @@ def _dt_min(ctx: FeatureContext) -> float:
 
 @_register("side_run")
 def _side_run(ctx: FeatureContext) -> float:
-    """Longest run of consecutive impacts on the same wall."""
+    """Longest run of consecutive impacts on the same wall, per forcing cycle.
+
+    In cycles rather than impacts, so that it does not grow with the record length
+    (a one-sided motion gives its impacts per cycle, alternation about 1 / cycles).
+    """
     if ctx.t.size == 0:
         return _NAN
     same = np.r_[False, ctx.side[1:] == ctx.side[:-1]]
@@ -140,7 +144,8 @@ def _side_run(ctx: FeatureContext) -> float:
     for s in same[1:]:
         run = run + 1 if s else 1
         best = max(best, run)
-    return float(best)
+    n_cycles = max(ctx.cycles().size - 1, 1)
+    return float(best / n_cycles)
 
 
 @_register("returnmap_top_share")
