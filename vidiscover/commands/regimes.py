@@ -78,7 +78,7 @@ def classify(recordings, meta, model_path, channels, as_json):
             click.echo(f"vidiscover: warning: {r['file']}: outside the training domain "
                        f"({w}); the label may be unreliable", err=True)
     human = "\n".join(f"{r['file']}: {r['label']} [{r['method']}] "
-                      f"(classifier: {_proba_text(r['proba'])})" for r in results)
+                      f"({_proba_text(r['proba'])})" for r in results)
     emit(as_json, results, human)
 
 
