@@ -25,7 +25,7 @@ from vidiscover.regimes.classifier import (
     load_model,
     save_model,
 )
-from vidiscover.regimes.dataset import PARAM_RANGES, draw_cases, generate
+from vidiscover.regimes.dataset import PARAM_RANGES, draw_cases, draw_realism_cases, generate
 from vidiscover.regimes.features import REGIME_FEATURES
 from vidiscover.workflows import simulate_to_memory
 
@@ -140,6 +140,10 @@ def small_sets():
 def test_draws_are_seeded_and_in_range():
     a, b, c = draw_cases(50, 1), draw_cases(50, 1), draw_cases(50, 2)
     assert a == b and a != c
+    r = draw_realism_cases(6, 1, compliant_share=0.5)
+    assert r == draw_realism_cases(6, 1, compliant_share=0.5) != draw_realism_cases(6, 2)
+    assert any(x.contact for x in r) and any(not x.contact for x in r)
+    assert all(x.k1 > 0 and x.sensors and 0.005 <= x.mass_ratio <= 0.05 for x in r)
     for case in a:
         for k in ("b", "amplitude", "frequency", "mass_ratio", "r_right", "r_left"):
             lo, hi = PARAM_RANGES[k]
