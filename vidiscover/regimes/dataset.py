@@ -8,6 +8,13 @@ a small bootstrap) and turned into one row: the registered features computed fro
 the recording alone, the ground-truth label of the simulated state
 (:func:`vidiscover.regimes.labels.label_simulation`) and the drawn parameters.
 
+Other rigs, contact models and instrument chains (:func:`draw_realism_cases`) are
+drawn as the realism corpus draws them (m1 1-10 kg, natural frequency 5-25 Hz, drive
+at 0.7-1.2 of it, compliant or exact walls, causal anti-alias filters, other sample
+rates, ADC, offsets); training analyses are given the chain's pulse (with the true
+contact duration) for speed, while :func:`corpus_set` and :func:`recording_row`
+analyse recordings as a user's are, with the pulse learned from the recording.
+
 Rare labels are oversampled by targeted draws: new cases jittered around the
 parameters of cases that already showed the label (and, for ``smr``, draws from
 the near-resonant box where it lives), each with its own fresh seed.
