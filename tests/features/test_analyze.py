@@ -108,7 +108,7 @@ def one_per_recording(rig):
 @then("index.html links every report")
 def index(rig):
     html = (rig["out"] / "index.html").read_text(encoding="utf-8")
-    assert re.findall(r'href="([^"]+)"', html) == [f"{p.stem}/report.html"
+    assert re.findall(r'<a href="([^"]+)"', html) == [f"{p.stem}/report.html"
                                                    for p in rig["recordings"]]
 
 
