@@ -586,18 +586,17 @@ def _strong_pulses(af: np.ndarray, bad: np.ndarray, fs: float, n_pulses: int,
         lo, hi = max(i - isolation, 0), min(i + isolation + 1, n)
         taken[lo:hi] = True
         seg = resid[lo:hi].copy()
+        same = np.sign(signed[lo:hi]) == np.sign(signed[i])     # samples of its sign
         # the smoother partly follows the pulse: its residual has lobes of the other
         # sign within half a window (0.35-0.42 of the peak behind a 0.24 fs Bessel
         # filter at 2.56 kHz); there a transient of the other sign must reach half the
         # peak (not a third) to count
         near = slice(max(i - lobe, lo) - lo, min(i + lobe + 1, hi) - lo)
-        seg[near] = np.where(np.sign(signed[lo:hi][near]) == np.sign(signed[i]),
-                             seg[near], seg[near] * (2.0 / 3.0))
+        seg[near] = np.where(same[near], seg[near], seg[near] * (2.0 / 3.0))
         # the pulse's own main lobe: samples of its sign falling away from the peak on
         # either side (a 1 ms contact spans 13 samples at 12.8 kHz: at +-4 samples it is
         # still above half its peak, and was taken for another transient)
         k = i - lo
-        same = (signed[lo:hi] > 0) == (signed[i] > 0)
         left, right = k, k
         while left > 0 and same[left - 1] and seg[left - 1] <= seg[left] + 3 * sigma:
             left -= 1
