@@ -373,13 +373,13 @@ class RegimeModel:
         """The classifier's labels of a DataFrame / list of feature dicts."""
         return self.classifier.predict(self.matrix(features))
 
-    def decide(self, features) -> tuple[np.ndarray, np.ndarray]:
+    def decide(self, features, clf=None) -> tuple[np.ndarray, np.ndarray]:
         """Labels as :meth:`classify` gives them, and the method of each.
 
         The rule baseline's label where it is one of :attr:`rule_labels`, the
-        classifier's elsewhere.
+        classifier's elsewhere (``clf``: its labels when already computed).
         """
-        clf = self.predict(features).astype(object)
+        clf = np.asarray(self.predict(features) if clf is None else clf, dtype=object)
         rules = RuleBaseline().predict(_rule_frame(features))
         keep = np.isin(rules, list(self.rule_labels))
         return (np.where(keep, rules, clf).astype(object),
@@ -420,16 +420,14 @@ class RegimeModel:
 
     def classify_analysis(self, analysis, file: str | None = None) -> Classification:
         """Label an :class:`~vidiscover.analysis.AnalysisResult`."""
-        from ..analysis.returnmap import compute_features
-        from .dataset import feature_context
-        from .features import ALL_FEATURES  # noqa: F401 - registers the regime features
+        from .dataset import analysis_features
 
-        feats = dict(analysis.features)
-        missing = [n for n in self.feature_names if n not in feats]
-        if missing:
-            feats.update(compute_features(feature_context(analysis), missing))
+        feats = analysis_features(analysis, self.feature_names)
         proba = self.predict_proba([feats]).iloc[0]
-        label, method = (str(v[0]) for v in self.decide([feats]))
+        # the classifier's label from these probabilities (its predict(), without
+        # evaluating the trees a second time): the first maximum in its class order
+        clf = proba[[str(c) for c in self.classifier.classes_]].idxmax()
+        label, method = (str(v[0]) for v in self.decide([feats], clf=[clf]))
         if method == "rules" and label in self.rule_proba:
             proba = pd.Series({lab: float(self.rule_proba[label].get(lab, 0.0))
                                for lab in LABELS})

@@ -36,7 +36,7 @@ from ..errors import InputError
 from .labels import LABELS
 
 __all__ = ["PARAM_RANGES", "Case", "draw_cases", "draw_realism_cases", "simulate_case",
-           "generate", "feature_context", "M1"]
+           "generate", "feature_context", "analysis_features", "M1"]
 
 #: LO mass of every drawn rig (kg, the paper's); the ball mass follows the mass ratio.
 M1 = 4.168
@@ -288,6 +288,23 @@ def feature_context(analysis):
                           x=analysis.reconstruction.x, returnmap=analysis.returnmap)
 
 
+def analysis_features(analysis, names=None) -> dict:
+    """The analysis's features plus those of ``names`` it lacks, computed from it.
+
+    ``names`` defaults to every feature a regime model may use
+    (:data:`~vidiscover.regimes.features.ALL_FEATURES`); the regime features are
+    registered after the analysis stage, so an analysis may not carry them.
+    """
+    from ..analysis.returnmap import compute_features
+    from .features import ALL_FEATURES
+
+    feats = dict(analysis.features)
+    missing = [n for n in (ALL_FEATURES if names is None else names) if n not in feats]
+    if missing:
+        feats.update(compute_features(feature_context(analysis), missing))
+    return feats
+
+
 def simulate_case(case: Case) -> dict:
     """Simulate, record, label and analyse one case; return its row.
 
@@ -299,9 +316,7 @@ def simulate_case(case: Case) -> dict:
         ``feature:NAME`` for every registered feature.
     """
     from ..analysis import analyze
-    from ..analysis.returnmap import compute_features
     from ..workflows import known_pulse, simulate_to_memory
-    from .features import ALL_FEATURES
 
     row = {f"param:{k}": v for k, v in case.to_dict().items()}
     try:
@@ -317,10 +332,7 @@ def simulate_case(case: Case) -> dict:
     except InputError as err:
         row.update(label=None, status=f"error: {err}")
         return row
-    feats = dict(out.features)
-    missing = [n for n in ALL_FEATURES if n not in feats]
-    if missing:
-        feats.update(compute_features(feature_context(out), missing))
+    feats = analysis_features(out)
     row.update(label=truth.label, status="ok" if res.status == 0 else f"sim: {res.message}")
     row.update({f"truth:{k}": v for k, v in truth.regime.items() if k != "label"})
     row.update({f"feature:{k}": v for k, v in feats.items()})
@@ -430,8 +442,6 @@ def recording_row(rec, label: str | None, name: str = "") -> dict:
         every feature of :data:`~vidiscover.regimes.features.ALL_FEATURES`.
     """
     from ..analysis import analyze
-    from ..analysis.returnmap import compute_features
-    from .features import ALL_FEATURES
 
     row = {"name": name or rec.name, "label": label}
     try:
@@ -439,10 +449,7 @@ def recording_row(rec, label: str | None, name: str = "") -> dict:
     except InputError as err:
         row.update(status=f"error: {err}")
         return row
-    feats = dict(out.features)
-    missing = [n for n in ALL_FEATURES if n not in feats]
-    if missing:
-        feats.update(compute_features(feature_context(out), missing))
+    feats = analysis_features(out)
     row.update(status="ok", **{f"feature:{k}": v for k, v in feats.items()})
     return row
 
