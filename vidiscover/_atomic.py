@@ -21,8 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from ._interrupt import cleanup
-from .errors import INTERRUPTED_ENV, InputError
+from ._interrupt import cleanup, stop_if_interrupted
+from .errors import InputError
 
 _replace = os.replace  # seam: tests inject a failure while committing files
 
@@ -84,16 +84,6 @@ def dump_json(tmp: Path, obj: Any, indent: int | None) -> None:
         fh.write(text + "\n")
 
 
-def _stop_if_interrupted() -> None:
-    """Raise KeyboardInterrupt if Ctrl-C arrived, even if some library swallowed it.
-
-    A library may catch the KeyboardInterrupt of a Ctrl-C (a reader turning it into
-    its own error, then handled as a bad file); nothing is put in place after one.
-    """
-    if os.environ.get(INTERRUPTED_ENV):
-        raise KeyboardInterrupt
-
-
 def _temp_name(target: Path, tag: str) -> Path:
     return target.with_name(f".{target.name}.{uuid.uuid4().hex[:12]}.{tag}")
 
@@ -120,7 +110,7 @@ def write_group(jobs: list[tuple[Path, Callable[[Path], None]]],
             tmp = _temp_name(target, "tmp")
             temps.append(tmp)
             write(tmp)
-        _stop_if_interrupted()
+        stop_if_interrupted()
         _commit([(tmp, target) for tmp, (target, _) in zip(temps, jobs, strict=True)], remove)
     except BaseException:
         with cleanup():
@@ -284,7 +274,7 @@ def atomic_directory(out_dir: str | os.PathLike) -> Iterator[Path]:
     try:
         yield tmp
         (tmp / MARKER).write_text(_MARKER_TEXT, encoding="utf-8")
-        _stop_if_interrupted()
+        stop_if_interrupted()
     except BaseException:
         with cleanup():
             shutil.rmtree(tmp, ignore_errors=True)

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import click
 
-from ._interrupt import in_cleanup
-from .errors import INTERRUPTED_ENV, InputError
+from ._interrupt import in_cleanup, interrupted, mark_interrupted
+from .errors import InputError
 from .params import PRESETS
 
 __all__ = ["main"]
@@ -37,9 +37,11 @@ def _fail(message: str) -> None:
 
 
 def handle_errors(func):
-    """One line + exit 2 for :class:`InputError` and missing files; exit 130 on Ctrl-C.
+    """One line + exit 2 for :class:`InputError` and missing files.
 
-    Outputs are written atomically (:mod:`vidiscover._atomic`), so an interrupted
+    Ctrl-C is left to the command group (:class:`LazyGroup`), which reports it and
+    exits with 130 whether it arrives inside a command or while one is imported;
+    outputs are written atomically (:mod:`vidiscover._atomic`), so an interrupted
     command leaves neither output nor temporary files behind.
     """
 
@@ -51,9 +53,6 @@ def handle_errors(func):
             _fail(str(err))
         except FileNotFoundError as err:
             _fail(f"{err.filename}: no such file; check the path")
-        except KeyboardInterrupt:
-            click.echo("vidiscover: interrupted; no output was written", err=True)
-            sys.exit(130)
 
     return wrapper
 
@@ -186,8 +185,15 @@ def _exit_interrupted() -> None:
 
 def entry() -> None:
     """The ``vidiscover`` console script: :func:`main` in a process of its own."""
+    import signal
+
     _OWN_PROCESS[0] = True
-    main()
+    try:
+        main()
+    finally:
+        # the command is done (or its interrupt reported): a Ctrl-C during the
+        # interpreter's shutdown must not turn its exit status into death by SIGINT
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
 class LazyGroup(click.Group):
@@ -214,50 +220,51 @@ class LazyGroup(click.Group):
         # raised again every REPEAT_S until the command stops.
         import signal
 
-        interrupted = []
         exiting = []                           # the interrupt is being reported
         repeat = hasattr(signal, "setitimer")
 
         def on_repeat(signum, frame):
-            if interrupted and not exiting and not in_cleanup():
+            if interrupted() and not exiting and not in_cleanup():
                 raise KeyboardInterrupt
 
         def on_sigint(signum, frame):
-            if interrupted and (exiting or in_cleanup()):   # a second Ctrl-C: let the
-                return                                       # cleanup or the exit end
-            if not interrupted and repeat:
+            if interrupted() and (exiting or in_cleanup()):   # a second Ctrl-C: let the
+                return                                         # cleanup or the exit end
+            if not interrupted() and repeat:
                 signal.signal(signal.SIGALRM, on_repeat)
                 signal.setitimer(signal.ITIMER_REAL, REPEAT_S, REPEAT_S)
-            interrupted.append(signum)
-            os.environ[INTERRUPTED_ENV] = "1"    # seen by _atomic before any commit
+            mark_interrupted()                 # seen by _atomic before any commit
             raise KeyboardInterrupt
 
         try:
             previous = signal.signal(signal.SIGINT, on_sigint)
         except ValueError:                     # not the main thread: leave it be
             previous = None
-        os.environ.pop(INTERRUPTED_ENV, None)
+        mark_interrupted(False)
         try:
             try:
                 result = super().invoke(ctx)
             finally:
-                if interrupted:
+                if interrupted():
                     exiting.append(True)
-                if interrupted and repeat:     # no repeat from here on; a late one
+                if interrupted() and repeat:   # no repeat from here on; a late one
                     signal.setitimer(signal.ITIMER_REAL, 0.0)   # is ignored
                     signal.signal(signal.SIGALRM, signal.SIG_IGN)
-        except (KeyboardInterrupt, Exception):
-            if not interrupted:
+        except KeyboardInterrupt:
+            mark_interrupted()                 # also one our handler did not raise
+        except (Exception, SystemExit):        # e.g. a swallowed one turned "bad file"
+            if not interrupted():
                 raise
         finally:
-            os.environ.pop(INTERRUPTED_ENV, None)
-            if interrupted:
+            stopped = interrupted()
+            mark_interrupted(False)
+            if stopped:
                 # exiting: a Ctrl-C a library held back and forwards late must not turn
                 # exit status 130 into death by SIGINT
                 signal.signal(signal.SIGINT, signal.SIG_IGN)
             elif previous is not None:
                 signal.signal(signal.SIGINT, previous)
-        if interrupted:                        # (also when a library swallowed it)
+        if stopped:                            # (also when a library swallowed it)
             _exit_interrupted()
         return result
 

@@ -7,12 +7,7 @@ one-line message naming *what* is wrong, *where* (file, column, parameter) and
 
 from __future__ import annotations
 
-__all__ = ["InputError", "INTERRUPTED_ENV"]
-
-#: Environment flag the command line sets once Ctrl-C arrived. A library may swallow
-#: the KeyboardInterrupt (a reader turning it into its own error); the writers in
-#: ``vidiscover._atomic`` check this flag and put no output in place after one.
-INTERRUPTED_ENV = "_VIDISCOVER_INTERRUPTED"
+__all__ = ["InputError"]
 
 
 class InputError(ValueError):
