@@ -211,9 +211,9 @@ def _csv_fast(held: list, delim: str, names: list[str]) -> dict[str, np.ndarray]
     import pyarrow as pa
     import pyarrow.csv as pacsv
 
-    # pyarrow's own Ctrl-C handler (set for the duration of a read) re-delivers the
-    # signal later, after the command reported the interrupt (exit by SIGINT instead of
-    # 130); the blocks are read in a Python loop that our handler interrupts anyway.
+    # The blocks are read in a Python loop, which the command line's Ctrl-C handler
+    # interrupts between blocks; pyarrow's own handler (it would replace ours for the
+    # duration of a read and turn Ctrl-C into its ArrowCancelled) stays off.
     pa.enable_signal_handlers(False)
     pieces: dict[str, list[np.ndarray]] = {c: [] for c in names}
     try:
@@ -225,9 +225,6 @@ def _csv_fast(held: list, delim: str, names: list[str]) -> dict[str, np.ndarray]
         for batch in batches:
             for c in names:
                 pieces[c].append(batch.column(c).to_numpy(zero_copy_only=False))
-    except pa.ArrowCancelled:
-        # pyarrow turns Ctrl-C during the parse into ArrowCancelled: an interrupt
-        raise KeyboardInterrupt from None
     except Exception:  # noqa: BLE001 - any doubt: the csv-module path diagnoses it
         return None
     good = sum(p.size for p in pieces[names[0]]) > 0 and all(
