@@ -168,9 +168,9 @@ def _exit_interrupted() -> None:
     """Report the interrupt and exit with status 130.
 
     In its own process the command line leaves at once (``os._exit`` after flushing):
-    the interpreter's shutdown (library exit handlers, threads being joined) is where
-    a late, forwarded Ctrl-C turned exit status 130 into death by SIGINT (seen in 1 of
-    ~20 tries). Outputs are already removed by the atomic writers by then.
+    leaving through the interpreter's shutdown (library exit handlers, threads being
+    joined) after an interrupt ended in death by SIGINT instead of 130 in about one try
+    of five. Outputs are already removed by the atomic writers by then.
     """
     click.echo("vidiscover: interrupted; no output was written", err=True)
     if _OWN_PROCESS[0]:
