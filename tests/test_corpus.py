@@ -12,7 +12,8 @@ def test_cases_are_a_pure_function_of_split_and_index():
     assert realism_case("dev", 3) != realism_case("dev", 4)
     dev = {c.params for c in realism_corpus("dev", 8)}
     test = {c.params for c in realism_corpus("test", 8)}
-    assert not dev & test
+    holdout = {c.params for c in realism_corpus("holdout", 8)}
+    assert not dev & test and not dev & holdout and not test & holdout
 
 
 def test_draws_stay_in_their_ranges(realism_dev):
