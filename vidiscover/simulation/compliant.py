@@ -915,7 +915,7 @@ class CompliantResult(SimulationResult):
                    ImpactTable.from_rows(loop.impacts), [], loop.status, loop.message,
                    loop.n_events, seg, cm, cm.contact)
 
-    def evaluate(self, t) -> dict[str, np.ndarray]:
+    def _evaluate(self, t: np.ndarray) -> dict[str, np.ndarray]:
         """State at times ``t`` (simulation clock), accurate inside contacts too.
 
         Returns
@@ -924,7 +924,6 @@ class CompliantResult(SimulationResult):
             ``x``, ``xd``, ``xdd`` (LO; ``xdd`` includes the contact forces and the
             friction reaction), ``y``, ``yd`` (ball), ``z`` = y - x, ``xe`` (base).
         """
-        t = np.atleast_1d(np.asarray(t, dtype=float))
         seg, cm = self._segments, self._model
         k = np.clip(np.searchsorted(seg["t0"], t, side="right") - 1, 0, seg["t0"].size - 1)
         kind, sub = seg["kind"][k], seg["i"][k]
