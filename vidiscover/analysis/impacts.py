@@ -846,6 +846,9 @@ class _Fitter:
         # instrument's artefacts
         horizon = min(max(float(v.max()) / (4.0 * accel), math.sqrt(2.0 * b / accel)),
                       _ARTEFACT_SPAN)
+        # contact duration of each pulse's wall: a same-wall return is timed from the
+        # exit of the earlier contact (a second entry within a contact is impossible)
+        tau = self.side_value(tuple(m.tau for m in self.models))
         for k in order:
             near = np.flatnonzero(keep & (np.abs(t - t[k]) <= horizon))
             ok = True
@@ -853,9 +856,9 @@ class _Fitter:
                 dt = abs(t[k] - t[i])
                 same = np.sign(self.amp[k]) == np.sign(self.amp[i])
                 if same and t[k] > t[i]:     # back on the wall it left: v_k <= accel dt
-                    ok = v[k] / 2.0 <= 2.0 * accel * dt
+                    ok = v[k] / 2.0 <= 2.0 * accel * max(dt - tau[i], 0.0)
                 elif same:                   # the stronger impact's speed gained in dt
-                    ok = v[i] / 2.0 <= 2.0 * (v[k] / 2.0 + accel * dt)
+                    ok = v[i] / 2.0 <= 2.0 * (v[k] / 2.0 + accel * max(dt - tau[k], 0.0))
                 elif t[k] > t[i]:            # crossing after leaving at <= v_i / 2
                     ok = 2.0 * (0.5 * v[i] * dt + 0.5 * accel * dt * dt) >= 2.0 * b
                 else:                        # crossing to arrive at <= v_i
