@@ -829,11 +829,12 @@ class _Fitter:
         pulse a weaker one is impossible (with a factor 2 to spare on every bound) when
         it needs, on the same wall, a return faster than the motion allows (after:
         ``v_k > accel dt``; before: the stronger impact's speed beyond ``v_k + accel
-        dt``) or, on the other wall, a crossing of ``2 b`` longer than the speeds
-        allow). Ringing and contact-shape misfit of the instrument make such pulses
-        (within :data:`_ARTEFACT_SPAN` of the stronger one); they are dropped,
-        strongest pulses first. The masses come from the metadata: wrong masses make
-        the bounds wrong.
+        dt``; ``dt`` counted from the exit of the earlier contact, its wall's learned
+        contact duration after its entry) or, on the other wall, a crossing of ``2 b``
+        longer than the speeds allow). Ringing and contact-shape misfit of the
+        instrument make such pulses (within :data:`_ARTEFACT_SPAN` of the stronger
+        one); they are dropped, strongest pulses first. The masses come from the
+        metadata: wrong masses make the bounds wrong.
         """
         if self.n < 2 or not (mass_ratio > 0 and accel > 0 and b > 0):
             return 0

@@ -18,7 +18,10 @@ the instrument:
    smoother (a few ms) is a broad, shape-free detector; local maxima above
    ``min_snr`` noise standard deviations with no comparable transient within
    ``isolation`` samples are kept, the strongest ``n_pulses`` of them. The smoother
-   is recomputed with their windows bridged, so the pulses do not leak into it.
+   is recomputed with their windows bridged by a local quartic
+   (:func:`.signals.bridge_gaps`; a straight line across a window cuts the chord of a
+   curved forced response, and the sag biased every learning window), so the pulses
+   do not leak into it.
 2. *Parametric fit.* Every candidate response (kind, order, cut-off, contact
    duration ``tau``) is fitted to all windows at once by variable projection: per
    pulse, a free amplitude, a free sub-sample shift (grid of 1/10 sample at 6400 Hz
@@ -71,7 +74,7 @@ from ..acquisition import (
     shape_centroid,
 )
 from ..errors import InputError
-from .signals import fill_gaps, robust_std, savgol_smooth
+from .signals import bridge_gaps, fill_gaps, robust_std, savgol_smooth
 
 __all__ = ["PulseModel", "PulseResponse", "learn_pulse"]
 
@@ -617,7 +620,7 @@ def _strong_pulses(af: np.ndarray, bad: np.ndarray, fs: float, n_pulses: int,
     mask = bad.copy()
     for i in peaks:
         mask[i - pre:i + post + 1] = True
-    base = savgol_smooth(fill_gaps(af, mask), win)
+    base = savgol_smooth(bridge_gaps(af, mask), win)
     jj = peaks[:, None] + np.arange(-pre, post + 1)[None, :]
     Y = af[jj] - base[jj]
     # the sign of the pulse: the side of its largest excursion
