@@ -20,8 +20,11 @@ identifiability limits of the physics shape the list and the verdicts:
   the clearance), which no statistic here can see without friction or tilt; the
   battery simulates width errors only;
 * Coulomb friction in a symmetric two-impacts-per-cycle orbit is nearly
-  equivalent to a lower constant r (the paper's Table 2 ambiguity); such cases
-  can end up below the significance threshold and count as misses.
+  equivalent to a lower constant r (the paper's Table 2 ambiguity) in everything
+  the impacts show; the force it puts on the LO during the flights
+  (``flights.drag``, :mod:`.components`) is what tells them apart;
+* a restitution effect is unobservable in a recording without impacts (a
+  two-effect case whose motion ends up impact-free can name only the other one).
 """
 
 from __future__ import annotations
