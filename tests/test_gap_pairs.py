@@ -6,7 +6,7 @@ import pytest
 
 from vidiscover.effects import Effects
 from vidiscover.gap.components import GapComponents
-from vidiscover.gap.diagnose import GapReport, _split_pair
+from vidiscover.gap.diagnose import GapReport, _pair_items, _split_pair
 from vidiscover.gap.fit import CandidateFit
 
 
@@ -40,3 +40,29 @@ def test_pair_order_follows_the_better_single_effect():
                 {"inclination": {"theta": 3.0}, "coulomb_friction": {"mu": 0.15}}, 2)
     assert [c.name for c in _split_pair(pair, [fa, fb])] == ["coulomb_friction",
                                                              "inclination"]
+
+
+def test_pairs_tried_include_forward_selection_and_effects_that_failed_alone():
+    nominal = _fit("nominal", 800.0, n_params=0)
+    fits = [_fit("clearance_error", 100.0), _fit("inclination", 540.0),
+            _fit("coulomb_friction", 570.0), _fit("contact_duration", 799.0),
+            _fit("asymmetric_restitution", 1500.0, n_params=2),
+            _fit("velocity_dependent_restitution", 1500.0, n_params=4)]
+    items = {(a.name, b) for a, b in _pair_items(nominal, fits)}
+    # the pool (the three that removed something) among themselves
+    assert {("clearance_error", "inclination"), ("clearance_error", "coulomb_friction"),
+            ("inclination", "coulomb_friction")} <= items
+    # forward selection: everything on top of the best
+    assert {("clearance_error", f.name) for f in fits[1:]} <= items
+    # an effect whose fit alone ended far above the nominal gap is paired with the
+    # pool (friction + restitution: the restitution fitted to r lowered by friction)
+    assert ("coulomb_friction", "asymmetric_restitution") in items
+    assert ("inclination", "velocity_dependent_restitution") in items
+    # nested effects are never paired, noise-level ones only with the best
+    assert not any({a, b} == {"asymmetric_restitution", "velocity_dependent_restitution"}
+                   for a, b in items)
+    assert ("inclination", "contact_duration") not in items
+    assert len(items) == len({frozenset(i) for i in items})
+    # a parameter budget (a law per wall checked against no-richer pairs)
+    small = {(a.name, b) for a, b in _pair_items(nominal, fits, max_params=3)}
+    assert small and all(n not in {"velocity_dependent_restitution"} for p in small for n in p)

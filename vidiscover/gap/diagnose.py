@@ -350,52 +350,122 @@ def _parsimonious(fits: list[CandidateFit]) -> list[CandidateFit]:
 
 
 #: Single effects whose pairs are fitted jointly when the best one leaves a
-#: significant gap (the best and the next ones that removed something on their own).
+#: significant gap (the best and the next ones that removed something on their own);
+#: also the number of pairs whose first effect is refitted on top of the second.
 PAIR_POOL = 3
+#: Pairs never fitted: nested effects (a law per wall contains constants per wall).
+_NO_PAIR = ({"asymmetric_restitution", "velocity_dependent_restitution"},)
 
 
-def _pair_item(item):
-    """Top-level worker: one pair of effects fitted jointly.
-
-    Effect ``b`` is fitted on top of ``a``'s fit, then ``a`` is refitted on top of
-    ``b``'s (block-coordinate descent: neither stays frozen); the better of the two.
-    """
+def _pair_step(item):
+    """Top-level worker: effect ``b`` fitted on top of ``fa``'s fit (``fa`` held)."""
     model, fa, b = item
-    step1 = fit_candidate(model, b, fa.effects, fa.r)
-    if step1 is None:
-        return None
-    base = Effects().with_effect(b, **step1.effects.active[b])
-    step2 = fit_candidate(model, fa.name, base, step1.r)
-    n = step1.n_sims + (step2.n_sims if step2 is not None else 0)
+    return fit_candidate(model, b, fa.effects, fa.r)
+
+
+def _pair_refit(item):
+    """Top-level worker: ``fa``'s effect refitted on top of ``b``'s fit from the pair."""
+    model, fa, step1 = item
+    base = Effects().with_effect(step1.name, **step1.effects.active[step1.name])
+    return fit_candidate(model, fa.name, base, step1.r)
+
+
+def _as_pair(fa: CandidateFit, step1: CandidateFit, step2: CandidateFit | None
+             ) -> CandidateFit:
+    """The better of a pair's two block-coordinate steps, named ``a+b``."""
     cands = [c for c in (step1, step2) if c is not None]
     joint = min(cands, key=lambda c: c.gap.total)
-    n_b = step1.n_params
-    return dataclasses.replace(joint, name=f"{fa.name}+{b}", n_params=fa.n_params + n_b,
-                               params={fa.name: dict(joint.effects.active[fa.name]),
-                                       b: dict(joint.effects.active[b])}, n_sims=n)
+    a, b = fa.name, step1.name
+    return dataclasses.replace(joint, name=f"{a}+{b}", n_params=fa.n_params + step1.n_params,
+                               params={a: dict(joint.effects.active[a]),
+                                       b: dict(joint.effects.active[b])},
+                               n_sims=sum(c.n_sims for c in cands))
 
 
-def _best_pair(model, nominal, fits, n_jobs, scheduler, max_params=None):
-    """The best jointly fitted pair among the :data:`PAIR_POOL` best single effects.
+def _pair_items(nominal, fits, max_params=None) -> list[tuple]:
+    """Which pairs (first effect's single fit, second effect's name) are fitted.
 
-    ``max_params``: only pairs with at most this many parameters.
+    * pairs among the :data:`PAIR_POOL` best single effects that removed something;
+    * forward selection: every other effect on top of the best of them;
+    * the pool's effects with every effect whose single fit ended well above the
+      nominal model. The nominal model is nested in every candidate, so such a fit
+      has left the recording's attractor (a restitution fitted to the r that
+      friction lowered, say); that is no evidence against the effect, and with the
+      other effect present it may fit.
+
+    ``max_params``: only pairs with at most this many parameters (and pool effects
+    with fewer).
     """
-    useful = [f for f in fits
-              if f.gap.total < nominal.gap.total - max(PENALTY, 0.05 * nominal.gap.total)]
+    margin = max(PENALTY, 0.05 * nominal.gap.total)
+    useful = [f for f in fits if f.gap.total < nominal.gap.total - margin]
+    failed = [f for f in fits if f.gap.total > nominal.gap.total + margin]
     pool = useful[:PAIR_POOL]
     if fits[0] not in pool:
         pool = [fits[0]] + pool[:PAIR_POOL - 1]
     if max_params is not None:
         pool = [f for f in useful if f.n_params < max_params][:PAIR_POOL]
-    items = [(model, a, b.name) for i, a in enumerate(pool) for b in pool[i + 1:]
-             if {a.name, b.name} not in ({"asymmetric_restitution",
-                                          "velocity_dependent_restitution"},)
-             and (max_params is None or a.n_params + b.n_params <= max_params)]
+    if not pool:
+        return []
+    order = {f.name: i for i, f in enumerate(fits)}
+    wanted = [(a, b) for i, a in enumerate(pool) for b in pool[i + 1:]]
+    wanted += [(pool[0], b) for b in fits if b is not pool[0]]
+    wanted += [(a, b) for a in pool[1:] for b in failed]
+    items, seen = [], set()
+    for a, b in wanted:
+        if order[b.name] < order[a.name]:      # the better single effect goes first
+            a, b = b, a
+        key = frozenset((a.name, b.name))
+        if (len(key) < 2 or key in seen or set(key) in _NO_PAIR
+                or (max_params is not None and a.n_params + b.n_params > max_params)):
+            continue
+        seen.add(key)
+        items.append((a, b.name))
+    return items
+
+
+def _best_pair(model, nominal, fits, n_jobs, scheduler, max_params=None):
+    """The best jointly fitted pair (see :func:`_pair_items` for which are tried).
+
+    Every pair's second effect is fitted on top of the first's fit; the
+    :data:`PAIR_POOL` best pairs then get the first effect refitted on top of the
+    second's (block-coordinate descent: neither stays frozen). ``max_params``: only
+    pairs with at most this many parameters.
+    """
+    items = _pair_items(nominal, fits, max_params)
     if not items:
         return None, 0
-    pairs = [p for p in _map(items, n_jobs, scheduler, worker=_pair_item) if p is not None]
+    steps = _map([(model, a, b) for a, b in items], n_jobs, scheduler, worker=_pair_step)
+    done = [(a, s) for (a, _), s in zip(items, steps) if s is not None]
+    if not done:
+        return None, 0
+    done.sort(key=lambda x: x[1].score)
+    refits = _map([(model, a, s) for a, s in done[:PAIR_POOL]], n_jobs, scheduler,
+                  worker=_pair_refit)
+    refits += [None] * (len(done) - len(refits))
+    pairs = [_as_pair(a, s, r) for (a, s), r in zip(done, refits)]
     n = sum(p.n_sims for p in pairs)
-    return (min(pairs, key=lambda c: c.score) if pairs else None), n
+    return _parsimonious_pair(pairs), n
+
+
+def _parsimonious_pair(pairs: list[CandidateFit]) -> CandidateFit:
+    """The best pair, or the same pair with a simpler nested effect when about as good.
+
+    The rule of :func:`_parsimonious` for single effects: a law per wall
+    (``velocity_dependent_restitution``) paired with X gives way to constants per wall
+    paired with X when their gap is within :data:`PARSIMONY` times its own plus the
+    penalty of the parameters saved.
+    """
+    best = min(pairs, key=lambda c: c.score)
+    names = set(best.name.split("+"))
+    for rich, simple in NESTED.items():
+        if rich not in names:
+            continue
+        want = (names - {rich}) | {simple}
+        alt = next((p for p in pairs if set(p.name.split("+")) == want), None)
+        if alt is not None and alt.gap.total <= PARSIMONY * best.gap.total + PENALTY * (
+                best.n_params - alt.n_params):
+            return alt
+    return best
 
 
 def _split_pair(pair: CandidateFit, fits: list) -> list:
