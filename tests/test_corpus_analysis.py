@@ -35,8 +35,8 @@ from vidiscover.corpus import realism_case
 MEASURED = {
     3: (0, 1.0, 21.7, 0.006),      # Kelvin-Voigt, Bessel 2, 5120 Hz
     8: (1, 1.0, 41.1, 0.005),      # Kelvin-Voigt, Butterworth 8, 8192 Hz
-    10: (3, 0.982, 32.9, 0.026),   # Kelvin-Voigt walls of two stiffnesses, Chebyshev 2
-    22: (0, 1.0, 26.1, None),      # Kelvin-Voigt, Butterworth 7, 5120 Hz
+    10: (0, 1.0, 38.9, 0.021),     # Kelvin-Voigt walls of two stiffnesses, Chebyshev 2
+    22: (0, 1.0, 10.0, None),      # Kelvin-Voigt, Butterworth 7, 5120 Hz
     1: (0, 1.0, 14.0, 0.006),      # Hunt-Crossley walls of two stiffnesses, Bessel 4, 8192 Hz
     17: (0, 1.0, 8.6, 0.007),      # Kelvin-Voigt walls of two stiffnesses, 12.8 kHz
     19: (0, 1.0, 58.0, 0.013),     # Kelvin-Voigt walls of two stiffnesses, Bessel 6
