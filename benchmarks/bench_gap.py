@@ -14,12 +14,17 @@ calibrate, 16 others to quote the no-effect rate) and prints them.
 
 Targets (issues 6 and 11): top-1 accuracy >= 90 % over >= 40 catalogue cases;
 no-effect cases "no significant gap" in >= 90 %; every out-of-catalogue case with an
-unexplained share >= 50 %; median shrink >= 60 %; ``gap`` on one recording <= 60 s
-on 2 cores; ``gap-check --quick`` <= 3 min.
+unexplained share >= 50 %; median shrink >= 60 %; both effects named in >= 70 % of the
+two-effect cases; true parameters inside the nominal 95 % intervals in >= 80 %;
+``gap`` on one recording <= 60 s on 2 cores (``--time``); ``gap-check --quick``
+<= 3 min (``--quick``). Each is printed with ``MET`` / ``MISSED``. ``--seed N``
+draws other sensor noise for the same cases: the method was developed on seed 0, so
+quote figures from another seed.
 
 Usage::
 
-    python benchmarks/bench_gap.py [--quick | --ci] [--n-jobs 2] [--time] [--json OUT.json]
+    python benchmarks/bench_gap.py [--quick | --ci] [--n-jobs 2] [--seed 0] [--time]
+        [--json OUT.json]
     python benchmarks/bench_gap.py --calibrate
 """
 
@@ -42,6 +47,9 @@ def main() -> None:
     ap.add_argument("--quick", action="store_true", help="the 4-case battery")
     ap.add_argument("--ci", action="store_true", help="the test suite's reduced battery")
     ap.add_argument("--n-jobs", type=int, default=2)
+    ap.add_argument("--seed", type=int, default=0,
+                    help="offset of the recordings' noise seeds (0: the cases the method "
+                         "was tuned on; others: fresh draws of the same cases)")
     ap.add_argument("--time", action="store_true", help="also time one diagnosis")
     ap.add_argument("--json", default=None, help="write the battery result here")
     ap.add_argument("--calibrate", action="store_true", help="recompute the model-form scales")
@@ -72,12 +80,17 @@ def main() -> None:
               f"{time.process_time() - c0:.1f} s CPU in the parent, {rep.n_sims} simulations, "
               f"verdict {rep.verdict}")
 
-    res = gap_check(quick=args.quick, n_jobs=args.n_jobs, progress=True,
+    res = gap_check(quick=args.quick, seed=args.seed, n_jobs=args.n_jobs, progress=True,
                     cases=CASES_CI if args.ci else None)
     print(human_check(res))
     n = res["n_catalogue_cases"]
     print(f"catalogue cases: {n} ({'MET' if n >= 40 else 'MISSED'}: target >= 40 for the "
           f"accuracy target to be quoted)")
+    if args.quick:
+        t = res["time_s"]
+        print(f"quick battery: {t:.0f} s wall with {args.n_jobs} workers "
+              f"({'MET' if t <= 180 else 'MISSED'}: target <= 3 min on 2 cores; "
+              f"only a figure on an idle machine)")
     print(f"load average at end: {os.getloadavg()[0]:.2f}")
     if args.json:
         with open(args.json, "w") as fh:

@@ -3,10 +3,12 @@
 Compliant walls, causal anti-alias filters and noise on every channel, made by code
 that shares nothing with vidiscover. Achieved (and tested here): P08 (no effect) ->
 ``none``, P09 (2.5 deg tilt) -> ``inclination``, P10 (walls 0.9 / 0.5) ->
-``asymmetric_restitution``. Not achieved: P03 (friction 0.12) and P02
-(Hunt-Crossley walls) come out ``none``: their gap (1.3 and 2.9) lies within the
-model-form spread calibrated on compliant no-effect recordings, although friction
-is the best candidate on P03.
+``asymmetric_restitution``, P03 (friction 0.12) -> ``coulomb_friction`` (found since
+the LO's force during the flights is a statistic: measured mu 0.106, interval
+[0.049, 0.162]). Not achieved: P02 (Hunt-Crossley walls) comes out ``none``: its gap
+(2.9) lies within the model-form spread calibrated on compliant no-effect recordings.
+P09 is won narrowly: the tilt leaves a gap of 1.1, a 0.18 mm clearance error 1.4
+(one parameter each).
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ from independent import GAP_TRUTH, load
 
 from vidiscover.gap import diagnose
 
-ACHIEVED = ("P08_gap_none", "P09_gap_tilt", "P10_gap_asym")
+ACHIEVED = ("P08_gap_none", "P09_gap_tilt", "P10_gap_asym", "P03_b13_friction")
 
 
 @functools.cache
@@ -34,7 +36,7 @@ def test_gap_verdict_matches_the_truth(name):
     rep, key = report(name)
     assert rep.verdict == (GAP_TRUTH[name] or "none")
     if GAP_TRUTH[name] is None:
-        assert not rep.significant and rep.gap_before < 2.0          # measured 0.6
+        assert not rep.significant and rep.gap_before < 3.0          # measured 1.1
         return
     assert rep.unexplained < 0.1                                     # measured 0.00
     att = rep.attributed()[0]
@@ -43,6 +45,11 @@ def test_gap_verdict_matches_the_truth(name):
         lo, hi = att["ci"]["theta"]
         assert lo <= key["setup"]["theta_deg"] <= hi
         assert att["params"]["theta"] == pytest.approx(2.5, abs=0.6)
+    if name == "P03_b13_friction":
+        # fitted 0.106, interval [0.049, 0.162]; the truth is 0.12
+        lo, hi = att["ci"]["mu"]
+        assert lo <= key["setup"]["mu"] <= hi
+        assert att["params"]["mu"] == pytest.approx(0.12, abs=0.03)
     if name == "P10_gap_asym":
         # the truth: the measured r of the contacts (0.902 right, 0.549 left)
         for side in ("right", "left"):
