@@ -248,3 +248,51 @@ def test_full_grid_pooled(seed):
             if mu == 0:
                 assert "sgn(z')" not in res.terms
     assert rights >= 9 * 0.95
+
+
+def _rows(seed: int, n: int = 120):
+    """Synthetic weak-form rows: tent integrals of (1, sgn(z')) over flights of varied
+    durations (s) and speeds, as pooled clearances give."""
+    rng = np.random.default_rng(seed)
+    T = rng.uniform(0.01, 0.03, (n, 2))
+    X = np.column_stack([T.sum(axis=1) / 2,
+                         (T[:, 0] * rng.choice([-1, 1], n) + T[:, 1] * rng.choice([-1, 1], n)) / 2])
+    return X, rng
+
+
+def test_constrained_fit_reports_zero_friction_where_the_free_fit_dips_below_zero():
+    """True mu = 0 with a 2 deg tilt: the free least squares lands at mu < 0 (the
+    noise), which is inadmissible; the fit constrained to mu >= 0 keeps the constant
+    alone and the tilt within 0.05 deg."""
+    from vidiscover.discovery.flight_law import _select
+
+    X, rng = _rows(3)
+    g0 = G_ACCEL * math.sin(math.radians(2.0))
+    # a small bias along the friction column, as the pulse areas' errors give
+    Yn = (X @ np.array([g0, 0.0]) + rng.normal(0, 2e-4, X.shape[0])
+          + 4e-4 * X[:, 1] / np.abs(X[:, 1]).mean())
+    free = np.linalg.lstsq(X, Yn, rcond=None)[0]
+    assert free[1] > 0                              # the free fit: mu < 0
+    cands = [(), (0,), (1,), (0, 1)]
+    coef, _ = _select(X, Yn, np.ones(2), cands, 1e-3, 4.0, friction=1)
+    assert coef[1] == 0.0
+    assert abs(math.degrees(math.asin(coef[0] / G_ACCEL)) - 2.0) < 0.05
+    unconstrained, _ = _select(X, Yn, np.ones(2), cands, 1e-3, 4.0)
+    assert unconstrained[1] > 0                     # what the constraint refuses
+
+
+def test_wall_scale_test_sees_a_biased_wall_and_passes_a_clean_one():
+    """A 3 % scale error of one wall's pulse areas moves the law: the statistic is far
+    above chi2(2) 99 % (9.21); without it, it stays below."""
+    from vidiscover.discovery.flight_law import _wall_scale_test
+
+    X, rng = _rows(5, 300)
+    side = rng.choice([1.0, -1.0], X.shape[0])
+    jumps = side * rng.uniform(1.0, 3.0, X.shape[0]) + 0.5 * X[:, 1] * 100
+    walls = np.column_stack([np.where(side > 0, jumps, 0.0), np.where(side < 0, jumps, 0.0)])
+    law = np.array([G_ACCEL * math.sin(math.radians(1.0)), -0.1 * G_ACCEL])
+    noise = rng.normal(0, 1e-3, X.shape[0])
+    clean = _wall_scale_test(X, X @ law + noise, walls, 1e-3)
+    biased = _wall_scale_test(X, X @ law + noise + 0.03 * walls[:, 0], walls, 1e-3)
+    assert clean[0] < 9.21
+    assert biased[0] > 9.21 and (biased[1] > 0.015 or biased[2] > 0.15)
