@@ -31,7 +31,7 @@ import numpy as np
 import pytest
 from independent import CASES, load, true_impacts
 
-from vidiscover.analysis import PulseModel, analyze, detectable, match_impacts
+from vidiscover.analysis import PulseModel, analyze, contact_dv, detectable, match_impacts
 from vidiscover.recording import Recording
 
 #: Measured median |t_est - t_in| (us) per case at the time of writing; the guard allows
@@ -60,7 +60,8 @@ def _scores(name: str):
     s = key["setup"]
     det = out.detection
     tr = true_impacts(key)
-    dv = np.array([i["xd_out"] - i["xd_in"] for i in key["impacts"]])
+    dv = contact_dv([i["v_in"] for i in key["impacts"]], [i["v_out"] for i in key["impacts"]],
+                    float(s["m1"]), float(s["m2"]))
     fs = float(s["fs"])
     truth_filter = PulseModel(cutoff=s["aa_hz"] / fs, kind=s["aa_kind"], order=s["aa_order"])
     ok = detectable(tr["t_in"], dv, s["noise_a"], fs, cutoff=truth_filter.peak(fs) / (2 * fs))

@@ -28,6 +28,7 @@ from .signals import Forcing, fit_forcing
 from .validation import (
                           DETECTABLE_SNR,
                           DetectionScores,
+                          contact_dv,
                           detectable,
                           detectable_truth,
                           detection_scores,
@@ -38,7 +39,8 @@ __all__ = [
     "AnalysisResult", "DETECTABLE_SNR", "DetectionScores", "FEATURES", "FLIGHT_COLUMNS",
     "FeatureContext", "Forcing", "IMPACT_COLUMNS", "ImpactDetection", "MU_TABLE",
     "PulseModel", "Reconstruction", "RestitutionEstimate", "ReturnMap", "WallStats",
-    "analyze", "compute_features", "detect_impacts", "detectable", "detectable_truth",
+    "analyze", "compute_features", "contact_dv", "detect_impacts", "detectable",
+    "detectable_truth",
     "detection_scores", "eq8_velocities", "estimate_restitution", "fit_forcing",
     "integrate_flights", "match_impacts", "mu_table", "reconstruct", "register_feature",
     "return_map", "solve_flights",
