@@ -17,7 +17,8 @@ Scores (targets of the issue):
 * *wrong but identified*: a reported law outside the tolerances (the worst kind of
   miss; listed case by case).
 
-Figures are quoted on the held-back ``test`` split; ``--split dev`` is for tuning.
+Figures are quoted on the held-back ``holdout`` split (``test`` was looked at case by
+case); ``--split dev`` is for tuning.
 
 Usage::
 
