@@ -292,11 +292,14 @@ def _smooth_part_corrected(det: ImpactDetection, a_bias: float) -> ImpactDetecti
 
 
 def _law_mu_theta(law) -> tuple[float, float]:
-    """``(mu, theta_deg)`` of a flight law or of a pair of numbers."""
-    from ..discovery.flight_law import FlightLawResult, flight_law_mu_theta
+    """``(mu, theta_deg)`` of a flight law or of a pair of numbers.
 
-    if isinstance(law, FlightLawResult):
-        return flight_law_mu_theta(law)
+    A law is anything with a ``mu_theta()`` method (a
+    :class:`~vidiscover.discovery.FlightLawResult`; the analysis does not import the
+    discovery stage that makes them).
+    """
+    if callable(getattr(law, "mu_theta", None)):
+        return law.mu_theta()
     try:
         mu, theta = (float(v) for v in law)
     except (TypeError, ValueError):
@@ -310,15 +313,11 @@ def _law_mu_theta(law) -> tuple[float, float]:
 def _tilted(recon: Reconstruction, det: ImpactDetection, rec, mu: float,
             theta_deg: float) -> Reconstruction:
     """``recon`` with the free-flight ball velocities solved under inclination."""
-    from types import SimpleNamespace
-
-    from ..discovery.flight_law import reconstruct_with_law
+    from .flights import FlightData, solve_free_flights
 
     if recon.n_flights == 0:
         return recon
-    view = SimpleNamespace(recording=rec, reconstruction=recon, detection=det,
-                           name=rec.name)
-    sol = reconstruct_with_law(view, (mu, theta_deg))
+    sol = solve_free_flights(FlightData(rec, recon, det), mu, theta_deg)
     fc = {k: np.array(v, copy=True) for k, v in recon.flight_columns.items()}
     ic = {k: np.array(v, copy=True) for k, v in recon.impact_columns.items()}
     k = sol["flight"]

@@ -97,7 +97,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..analysis.friction import solve_flights
+from ..analysis.flights import STEPS, FlightData, reconstruct_flights, solve_free_flights
 from ..errors import InputError
 from ..params import G_ACCEL
 from .sparse import (
@@ -127,7 +127,7 @@ DEFAULT_LIBRARY = ("1", "sgn(z')", "z'", "z'|z'|", "z'^3")
 
 _FRICTION = "sgn(z')"
 _CONSTANT = "1"
-_STEPS = 192                # integration steps per flight
+_STEPS = STEPS              # integration steps per flight
 _MAX_ITER = 8
 _N_THRESHOLDS = 12
 _MAX_MISFIT = 0.01          # largest RMS residual / RMS ball velocity jump
@@ -276,6 +276,19 @@ class FlightLawResult:
         """Whether the constant term (inclination) is kept."""
         return _CONSTANT in self.terms
 
+    def mu_theta(self) -> tuple[float, float]:
+        """``(mu, theta_deg)`` of the identified law, for the reconstruction.
+
+        Raises
+        ------
+        InputError
+            When the law was not identified.
+        """
+        if not self.identified:
+            raise InputError(f"flight law not identified ({self.reason}); analyse with an "
+                             "assumed mu instead, or pool recordings at several clearances")
+        return max(float(self.mu), 0.0), float(self.theta_deg)
+
     def to_dict(self) -> dict:
         """JSON-ready dict.
 
@@ -342,10 +355,7 @@ def flight_law_mu_theta(result: FlightLawResult) -> tuple[float, float]:
     if not isinstance(result, FlightLawResult):
         raise InputError(f"flight_law must be a FlightLawResult from discover_flight_law, "
                          f"was {type(result).__name__}")
-    if not result.identified:
-        raise InputError(f"flight law not identified ({result.reason}); analyse with an "
-                         "assumed mu instead, or pool recordings at several clearances")
-    return max(float(result.mu), 0.0), float(result.theta_deg)
+    return result.mu_theta()
 
 
 #: The fix most reasons of a flight law that is not identified share.
@@ -378,126 +388,11 @@ def _equation(terms, coefs) -> str:
 
 
 # ----------------------------------------------------------------- per recording
-class _Record:
-    """Impacts, flights and LO motion of one analysed recording."""
-
-    def __init__(self, analysis) -> None:
-        rec = getattr(analysis, "recording", None)
-        if rec is None:
-            raise InputError("discover_flight_law needs AnalysisResult objects from "
-                             "analyze(rec) (their recording is missing)")
-        recon = analysis.reconstruction
-        det = analysis.detection
-        imp = recon.impact_columns
-        fl = recon.flight_columns
-        self.name = analysis.name
-        self.ratio = float(rec.meta.m1) / float(rec.meta.m2)
-        self.t_imp = np.asarray(imp["t"], float)
-        self.y_imp = np.asarray(imp["y"], float)
-        self.dv = np.asarray(imp["dv"], float)
-        area = det.columns.get("area") if hasattr(det.columns, "get") else None
-        self.area = (np.asarray(area, float) if area is not None and len(area) == len(self.dv)
-                     else np.full(self.dv.shape, np.nan))
-        side = np.asarray(imp["side"])
-        self.sign = (np.where(side == "right", 1.0, -1.0) if side.dtype.kind in "UO"
-                     else np.sign(side.astype(float)))
-        self.v_minus = np.asarray(imp["v_minus"], float)
-        self.v_plus = np.asarray(imp["v_plus"], float)
-        self.reliable = np.asarray(det.columns["reliable"], bool)
-        self.ts = np.asarray(fl["t_start"], float)
-        self.te = np.asarray(fl["t_end"], float)
-        self.i_s = np.asarray(fl["i_start"], np.int64)
-        self.i_e = np.asarray(fl["i_end"], np.int64)
-        self.kind = np.asarray(fl["kind"])
-        t = np.asarray(recon.t, float)
-        # LO velocity without its jumps, to be evaluated anywhere inside a flight
-        cdv = np.concatenate([[0.0], np.cumsum(self.dv)])
-        self._t = t
-        self._cdv = cdv
-        self._vc = np.asarray(recon.v, float) - cdv[np.searchsorted(self.t_imp, t, side="left")]
-        self._acc = np.asarray(det.baseline, float)
-
-    @property
-    def n_flights(self) -> int:
-        return int(self.ts.size)
-
-    def lo_velocity(self, tq):
-        tq = np.asarray(tq, float)
-        return np.interp(tq, self._t, self._vc) + self._cdv[np.searchsorted(self.t_imp, tq)]
-
-    def lo_acceleration(self, tq):
-        return np.interp(np.asarray(tq, float), self._t, self._acc)
-
-
-def reconstruct_flights(t_s, t_e, y_s, y_e, v_start, v_end, lo_velocity, lo_acceleration,
-                        mu: float, theta_deg: float, steps: int = _STEPS) -> dict:
-    """Ball motion in flights under ``y'' = -mu g sgn(z') + g sin(theta)``.
-
-    A constant acceleration ``g0 = g sin(theta)`` is absorbed by a change of frame:
-    with ``Y = y - g0 (t - t_s)^2 / 2`` and the LO velocity ``V = x' - g0 (t - t_s)``
-    the relative velocity is unchanged, ``Y'' = -mu g sgn(Y' - V)`` and the ball
-    sticks while ``|x'' - g0| <= mu g``, which is the pure-friction problem solved by
-    :func:`vidiscover.analysis.friction.solve_flights` (z' may change sign, the ball
-    may stick and slide again). Without friction the flight is a parabola.
-
-    Parameters
-    ----------
-    t_s, t_e, y_s, y_e : ndarray
-        Flight start/end times (s) and ball positions (m).
-    v_start, v_end : ndarray
-        LO velocity just after the start and before the end impact (m/s).
-    lo_velocity, lo_acceleration : callable
-        LO velocity (without jumps inside a flight) and acceleration at times (s).
-    mu : float
-        Friction coefficient (>= 0).
-    theta_deg : float
-        Inclination (deg).
-    steps : int
-        Integration steps per flight.
-
-    Returns
-    -------
-    dict
-        ``t``, ``w`` (ball velocity), ``v`` (LO velocity), ``zd`` (z'), ``acc`` (LO
-        acceleration), shape (n_flights, steps + 1), and ``closure`` (m).
-    """
-    t_s, t_e = np.asarray(t_s, float), np.asarray(t_e, float)
-    y_s, y_e = np.asarray(y_s, float), np.asarray(y_e, float)
-    v_start, v_end = np.asarray(v_start, float), np.asarray(v_end, float)
-    F, M = t_s.size, int(steps)
-    g0 = G_ACCEL * math.sin(math.radians(theta_deg))
-    frac = np.linspace(0.0, 1.0, M + 1)
-    dt = t_e - t_s
-    T = t_s[:, None] + dt[:, None] * frac[None, :]
-    V = np.asarray(lo_velocity(T), float).reshape(F, M + 1)
-    V[:, 0], V[:, -1] = v_start, v_end
-    A = np.asarray(lo_acceleration(T), float).reshape(F, M + 1)
-    if mu <= 0.0 or F == 0:
-        w = (y_e - y_s) / dt - g0 * dt / 2.0
-        W = w[:, None] + g0 * (T - t_s[:, None])
-        return {"t": T, "w": W, "v": V, "zd": W - V, "acc": A, "closure": np.zeros(F)}
-
-    def vel(tq):
-        tq = np.asarray(tq, float).reshape(F, -1)
-        return lo_velocity(tq) - g0 * (tq - tq[:, :1])
-
-    def acc(tq):
-        return lo_acceleration(tq) - g0
-
-    sol = solve_flights(t_s, t_e, y_s, y_e - g0 * dt ** 2 / 2.0, vel, acc, mu,
-                        v_start=v_start, v_end=v_end - g0 * dt, steps=M)
-    W = sol.w + g0 * (sol.t - t_s[:, None])
-    zd = sol.w - (V - g0 * (T - t_s[:, None]))
-    zd[np.abs(zd) < 1e-12] = 0.0
-    return {"t": T, "w": W, "v": V, "zd": zd, "acc": A, "closure": sol.closure}
-
-
 def reconstruct_with_law(analysis, law) -> dict:
     """Ball launch/arrival velocities of every free flight of ``analysis`` under ``law``.
 
-    The feedback of an identified flight law into the reconstruction: the flights of
-    :attr:`AnalysisResult.reconstruction` are solved again with the law's mu and
-    theta (:func:`reconstruct_flights`) along the measured LO motion.
+    The feedback of an identified flight law into the reconstruction
+    (:func:`vidiscover.analysis.flights.solve_free_flights` on the analysis's flights).
 
     Parameters
     ----------
@@ -514,18 +409,7 @@ def reconstruct_with_law(analysis, law) -> dict:
     """
     mu, theta = flight_law_mu_theta(law) if isinstance(law, FlightLawResult) else (
         max(float(law[0]), 0.0), float(law[1]))
-    rec = _Record(analysis)
-    k = np.flatnonzero(rec.kind == "free")
-    v0, v1 = rec.v_plus[rec.i_s[k]], rec.v_minus[rec.i_e[k]]
-    fl = reconstruct_flights(rec.ts[k], rec.te[k], rec.y_imp[rec.i_s[k]],
-                             rec.y_imp[rec.i_e[k]], v0, v1, rec.lo_velocity,
-                             rec.lo_acceleration, mu, theta)
-    zd = fl["zd"]
-    nz = np.where(zd == 0, 0.0, np.sign(zd))
-    changes = np.array([int(np.count_nonzero(np.diff(r[r != 0]))) for r in nz], dtype=np.int64)
-    return {"flight": k, "t_start": rec.ts[k], "t_end": rec.te[k], "w_start": fl["w"][:, 0],
-            "w_end": fl["w"][:, -1], "zd_start": fl["w"][:, 0] - v0,
-            "zd_end": fl["w"][:, -1] - v1, "sign_changes": changes}
+    return solve_free_flights(FlightData.of(analysis), mu, theta)
 
 
 # ------------------------------------------------------------------ regression
@@ -878,7 +762,7 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
         raise InputError(f"max_iter must be an integer >= 1, was {max_iter!r}")
     if not (isinstance(max_tilt_deg, (int, float)) and 0 < max_tilt_deg < 90):
         raise InputError(f"max_tilt_deg must be in (0, 90) degrees, was {max_tilt_deg!r}")
-    records = [_Record(a) for a in analyses]
+    records = [FlightData.of(a) for a in analyses]
     tents = _Tents(records, library)
     if tents.n < len(library) + 5:
         raise InputError(f"only {tents.n} usable impacts (tents) for {len(library)} "
