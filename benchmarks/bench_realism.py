@@ -136,7 +136,8 @@ def _summary(rows: list[dict]) -> dict:
         "n_walls": len(walls),
         "count_share_old": float(np.mean([r["count_ok_old"] for r in periodic])) if periodic
         else float("nan"),
-        "recall_old": float(np.nanmean([r["recall_old"] for r in rows])) if rows
+        "recall_old": float(np.mean(old)) if (old := [r["recall_old"] for r in rows
+                                                      if np.isfinite(r["recall_old"])])
         else float("nan")}
 
 
