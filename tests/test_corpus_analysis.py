@@ -47,6 +47,21 @@ SLOW = (1, 17, 19)
 TIMING_MISSES = {19}
 
 
+def _detectable(case, imp, fs: float, dv=None) -> np.ndarray:
+    """:func:`detectable` with the case's true anti-alias peak and noise.
+
+    ``dv``: the contact impulses (:func:`contact_dv`) unless given.
+    """
+    s = case.sensors
+    kind = s.get("anti_alias", "linear-phase")
+    true_filter = (PulseModel() if kind == "linear-phase" else
+                   PulseModel(cutoff=s["aa_cutoff"] / fs, kind=kind, order=s["aa_order"]))
+    if dv is None:
+        dv = contact_dv(imp.v_in, imp.v_out, case.m1, case.m2)
+    return detectable(imp.t_in, dv, float(s.get("a_noise", 0.05)), fs,
+                      cutoff=true_filter.peak(fs) / (2 * fs))
+
+
 @functools.cache
 def scored(index: int) -> dict:
     """Simulate, analyse and score one development case."""
@@ -56,13 +71,7 @@ def scored(index: int) -> dict:
     fs = rec.sample_rate
     out = analyze(rec, flight_law=(case.mu, case.theta), n_boot=0)
     det = out.detection
-    s = case.sensors
-    kind = s.get("anti_alias", "linear-phase")
-    true_filter = (PulseModel() if kind == "linear-phase" else
-                   PulseModel(cutoff=s["aa_cutoff"] / fs, kind=kind, order=s["aa_order"]))
-    dv = contact_dv(imp.v_in, imp.v_out, case.m1, case.m2)
-    ok = detectable(imp.t_in, dv, float(s.get("a_noise", 0.05)), fs,
-                    cutoff=true_filter.peak(fs) / (2 * fs))
+    ok = _detectable(case, imp, fs)
     side_true = np.where(np.asarray(imp.side) == "right", 1, -1)
     ie, it = match_impacts_by_wall(det.t, det.side, imp.t_in, imp.side)
     r_err = []
@@ -133,16 +142,9 @@ def _episodes(index: int):
     rec, imp = sim.recording, sim.truth.impacts
     fs = rec.sample_rate
     det = analyze(rec, flight_law=(case.mu, case.theta), n_boot=0).detection
-    s = case.sensors
-    kind = s.get("anti_alias", "linear-phase")
-    true_filter = (PulseModel() if kind == "linear-phase" else
-                   PulseModel(cutoff=s["aa_cutoff"] / fs, kind=kind, order=s["aa_order"]))
-    dv = contact_dv(imp.v_in, imp.v_out, case.m1, case.m2)
-    ok = detectable(imp.t_in, dv, float(s.get("a_noise", 0.05)), fs,
-                    cutoff=true_filter.peak(fs) / (2 * fs))
+    ok = _detectable(case, imp, fs)
     # the earlier criterion: the LO velocity change from contact entry to exit
-    ok_lo = detectable(imp.t_in, np.asarray(imp.dv, dtype=float), float(s.get("a_noise", 0.05)),
-                       fs, cutoff=true_filter.peak(fs) / (2 * fs))
+    ok_lo = _detectable(case, imp, fs, dv=np.asarray(imp.dv, dtype=float))
     ie, it = match_impacts_by_wall(det.t, det.side, imp.t_in, imp.side)
     return imp, ok, ok_lo, det, ie, it
 
