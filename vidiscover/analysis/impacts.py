@@ -68,7 +68,16 @@ from ..errors import InputError
 from ..params import G_ACCEL
 from ._table import check_columns, empty_columns, to_frame
 from .pulse import PulseModel, PulseResponse, learn_pulse
-from .signals import check_recording, clipped_mask, fill_gaps, robust_std, savgol_smooth
+from .signals import (
+    _fill_in_place,
+    check_recording,
+    clipped_mask,
+    fill_gaps,
+    good_sample,
+    robust_std,
+    savgol_smooth,
+    second_difference_sample,
+)
 
 __all__ = ["PulseModel", "ImpactDetection", "detect_impacts", "IMPACT_COLUMNS"]
 
@@ -310,9 +319,11 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
     fit = _Fitter(af, bad, models, fs, int(fit_halfwidth))
     hw = fit.hw
 
+    # (full-length arrays are made in place and dropped when done: a long record holds
+    # millions of samples per array)
     def smooth_part():
         sm = af - fit.render()
-        return fill_gaps(sm, bad) if bad.any() else sm
+        return _fill_in_place(sm, bad) if bad.any() else sm
 
     def smoother_input():
         # the smooth part with the main lobes of the fitted pulses bridged: what the
@@ -324,18 +335,20 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
             c = np.rint(fit.pos).astype(np.int64)
             j = np.clip(c[:, None] + np.arange(-_LOBE, _LOBE + 1)[None, :], 0, n - 1)
             mask[j.ravel()] = True
-        return fill_gaps(sm, mask) if mask.any() else sm
+        return _fill_in_place(sm, mask) if mask.any() else sm
 
     # round 0: the strong pulses over a first (pulse-contaminated) smooth part
     base = savgol_smooth(smoother_input(), win)
-    d2 = np.diff(af, 2)[~(bad[2:] | bad[1:-1] | bad[:-2])]
-    sigma = robust_std(d2[:: max(1, d2.size // 8192)]) / math.sqrt(6.0)
+    sigma = robust_std(second_difference_sample(af, bad)) / math.sqrt(6.0)
     resid = af - base
     resid[bad] = 0.0
     if not sigma > 0:
         sigma = max(float(np.std(resid)), 1e-12)
-    z = fit.matched(resid) / sigma
-    first = _candidates(z, threshold, rel=_FIRST_ROUND_REL, span=hw)
+    z = fit.matched(resid)
+    del resid
+    z /= sigma
+    first = _candidates(z, threshold, rel=_FIRST_ROUND_REL, span=hw, overwrite=True)
+    del z
     if clip.any():
         # a run of clipped samples is a pulse too strong to read: seed a candidate at
         # its centre and ignore first-round peaks around it (filter artefacts of the
@@ -365,16 +378,19 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
     # later rounds: the residual of the fitted pulses over the clean smooth part (weak
     # pulses hardly change the smooth part or the noise, so neither is recomputed)
     for rnd in range(max_rounds):
-        resid = smooth_part() - base
+        resid = smooth_part()
+        resid -= base
         resid[bad] = 0.0
         if rnd == 0:
-            good = resid[~bad]
-            sigma = robust_std(good[:: max(1, good.size // 8192)]) or sigma
-        z = fit.matched(resid) / sigma
+            sigma = robust_std(good_sample(resid, bad)) or sigma
+        z = fit.matched(resid)
+        del resid
+        z /= sigma
         near = None
         if fit.n:
             near = (fit.pos, mismatch * fit.snr(sigma))
-        idx = _candidates(z, threshold, near=near, span=hw)
+        idx = _candidates(z, threshold, near=near, span=hw, overwrite=True)
+        del z
         if idx.size == 0:
             break
         fit.add(idx)
@@ -389,8 +405,7 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
     smooth = smooth_part()
     resid = smooth - base
     resid[bad] = 0.0
-    good = resid[~bad]
-    sigma = robust_std(good[:: max(1, good.size // 8192)]) or sigma
+    sigma = robust_std(good_sample(resid, bad)) or sigma
     n_start = n_prev = fit.n
     fit.prune(threshold, sigma)
     fit.prune_lobes(threshold, sigma, mismatch)
@@ -408,6 +423,7 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         fit.prune_ringing(threshold, sigma, response)
         n_impossible += fit.drop_infeasible(*kin)
     if fit.n != n_start:
+        del smooth
         smooth = smooth_part()
     a_smooth = smooth
     if bad.any():
@@ -429,6 +445,7 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         warnings.append(f"{n_fast} weak pulse(s) dropped: the ball cannot cross the clearance "
                         f"2b = {2 * b * 1e3:.3g} mm faster than {max_ball_speed:g} m/s")
     if n_fast or n_early:
+        del smooth, resid, a_smooth
         smooth = smooth_part()
         resid = smooth - base
         resid[bad] = 0.0
@@ -561,22 +578,39 @@ def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
     return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
 
 
+_BLOCK = 1 << 16          # samples per block of the element-wise full-length steps
+
+
 def _matched(resid: np.ndarray, mf: list[np.ndarray]) -> np.ndarray:
     """Matched-filter statistic: the larger (in magnitude) of the 0 and 1/2 sample taps."""
     c0 = np.correlate(resid, mf[0], mode="same")
     c1 = np.correlate(resid, mf[1], mode="same")
-    return np.where(np.abs(c0) >= np.abs(c1), c0, c1)
+    _take_larger(c0, c1, keep_ties=True)
+    return c0
+
+
+def _take_larger(z0: np.ndarray, z1: np.ndarray, keep_ties: bool) -> None:
+    """The larger in magnitude of ``z0`` and ``z1``, into ``z0`` (in place, by blocks).
+
+    ``z0 = where(|z0| >= |z1|, z0, z1)`` if ``keep_ties``, else
+    ``z0 = where(|z1| > |z0|, z1, z0)``.
+    """
+    for lo in range(0, z0.size, _BLOCK):
+        a, b = z0[lo:lo + _BLOCK], z1[lo:lo + _BLOCK]
+        take = ~(np.abs(a) >= np.abs(b)) if keep_ties else np.abs(b) > np.abs(a)
+        np.copyto(a, b, where=take)
 
 
 def _candidates(z: np.ndarray, threshold: float, rel: float = 0.0, near=None,
-                span: int = 24) -> np.ndarray:
+                span: int = 24, overwrite: bool = False) -> np.ndarray:
     """Local maxima of |z| above the threshold (sparse: only above-threshold samples).
 
     ``rel``: a peak must also reach ``rel`` times the largest |z| within ``span``.
     ``near = (positions, floors)``: within ``span`` samples of a fitted pulse the
     threshold is raised by its floor, and peaks within 1.5 samples are skipped.
+    ``overwrite``: ``z`` may be replaced by ``|z|`` (no copy).
     """
-    az = np.abs(z)
+    az = np.abs(z, out=z) if overwrite else np.abs(z)
     above = np.flatnonzero(az > threshold)
     if above.size == 0:
         return above
@@ -636,9 +670,9 @@ class _Fitter:
         self.two = self.models[0] != self.models[1]
         self.hw = max(m.span(fs) for m in self.models)
         self.pad = self.hw + L + 4
-        p = self.pad
-        self.data = np.concatenate([np.zeros(p), af, np.zeros(p)])
-        self.weight = np.concatenate([np.zeros(p), (~bad).astype(float), np.zeros(p)])
+        # the data and its weights (1 good, 0 bad) are read at the fit windows only,
+        # zero in the ``pad`` samples of padding at both ends (no padded copies)
+        self.data, self.bad = af, bad
         self.fs, self.L = fs, L
         self.tpl = [_templates(m, fs, L) for m in self.models]
         self.knorm = tuple(m.norm(fs) for m in self.models)
@@ -676,7 +710,7 @@ class _Fitter:
         z = _matched(resid, self.tpl[0][3])
         if self.two:
             z1 = _matched(resid, self.tpl[1][3])
-            z = np.where(np.abs(z1) > np.abs(z), z1, z)
+            _take_larger(z, z1, keep_ties=False)
         return z
 
     def _split(self):
@@ -712,30 +746,37 @@ class _Fitter:
         order = np.argsort(pos, kind="stable")
         self.pos, self.amp = pos[order], amp[order]
 
+    def _at(self, idx: np.ndarray, base: np.ndarray):
+        """Data minus ``base``, and weights, at padded sample indices (0 in the padding)."""
+        k = idx - self.pad
+        inside = (k >= 0) & (k < self.n_samples)
+        k = np.clip(k, 0, self.n_samples - 1)
+        target = np.where(inside, self.data[k] - base[k], 0.0)
+        return target, np.where(inside & ~self.bad[k], 1.0, 0.0)
+
     def windows(self, base: np.ndarray, rows: np.ndarray):
         """Fit windows (data minus smooth part minus the other pulses) and weights."""
         p = self.pad
-        target = self.data - np.concatenate([np.zeros(p), base, np.zeros(p)])
         model, pulses = self.render(padded=True, with_pulses=True)
         lo = self.hw - self.L
         c, _ = self._split()
         idx = c[rows, None] + self.jl[None, :] + p
-        Y = target[idx] - model[idx] + pulses[rows, lo:lo + 2 * self.L + 1]
-        return Y, self.weight[idx]
+        target, W = self._at(idx, base)
+        Y = target - model[idx] + pulses[rows, lo:lo + 2 * self.L + 1]
+        return Y, W
 
     def backfit(self, base: np.ndarray, iterations: int = 2) -> None:
         if self.n == 0:
             return
         p = self.pad
-        target = self.data - np.concatenate([np.zeros(p), base, np.zeros(p)])
         lo = self.hw - self.L
         for _ in range(iterations):
             model, pulses = self.render(padded=True, with_pulses=True)
             c, _ = self._split()
             own = pulses[:, lo:lo + 2 * self.L + 1]
             idx = c[:, None] + self.jl[None, :] + p
-            Y = target[idx] - model[idx] + own
-            W = self.weight[idx]
+            target, W = self._at(idx, base)
+            Y = target - model[idx] + own
             delta, amp = self.fit_windows(Y, W)
             pos = c + delta
             ok = np.isfinite(pos) & np.isfinite(amp)

@@ -127,15 +127,72 @@ def fill_gaps(y: np.ndarray, bad: np.ndarray) -> np.ndarray:
 
     Gaps at the ends take the nearest good value; an all-bad input gives zeros.
     """
-    y = np.array(y, dtype=float)
+    return _fill_in_place(np.array(y, dtype=float), bad)
+
+
+def _fill_in_place(y: np.ndarray, bad: np.ndarray) -> np.ndarray:
+    """:func:`fill_gaps` overwriting the float array ``y``; returns ``y``.
+
+    Only the good samples next to a gap take part in the interpolation (the same
+    brackets, so the same values, without full-length index arrays).
+    """
     if not bad.any():
         return y
     good = ~bad
     if not good.any():
-        return np.zeros_like(y)
-    idx = np.arange(y.size)
-    y[bad] = np.interp(idx[bad], idx[good], y[good])
+        y[...] = 0.0
+        return y
+    edge = np.zeros(y.size, dtype=bool)
+    edge[:-1] |= bad[1:]
+    edge[1:] |= bad[:-1]
+    edge &= good
+    del good
+    xp = np.flatnonzero(edge)
+    del edge
+    xb = np.flatnonzero(bad)
+    y[xb] = np.interp(xb, xp, y[xp])
     return y
+
+
+_SAMPLE_BLOCK = 1 << 16
+
+
+def good_sample(x: np.ndarray, bad: np.ndarray, count: int = 8192) -> np.ndarray:
+    """``x[~bad][::max(1, n_good // count)]`` without a full-length copy."""
+    if not bad.any():
+        return x[:: max(1, x.size // count)]
+    step = max(1, (x.size - int(np.count_nonzero(bad))) // count)
+    return x[_ranked(lambda lo, hi: ~bad[lo:hi], x.size, step)]
+
+
+def second_difference_sample(y: np.ndarray, bad: np.ndarray, count: int = 8192
+                             ) -> np.ndarray:
+    """``d2[::max(1, d2.size // count)]`` of ``d2 = np.diff(y, 2)`` over good triples.
+
+    The same values as ``np.diff(y, 2)[~(bad[2:] | bad[1:-1] | bad[:-2])]`` sampled,
+    computed at the sampled positions only.
+    """
+    m = y.size - 2
+    if not bad.any():
+        k = np.arange(0, m, max(1, m // count))
+    else:
+        def ok(lo, hi):
+            return ~(bad[lo + 2:hi + 2] | bad[lo + 1:hi + 1] | bad[lo:hi])
+
+        n_ok = sum(int(np.count_nonzero(ok(lo, min(lo + _SAMPLE_BLOCK, m))))
+                   for lo in range(0, m, _SAMPLE_BLOCK))
+        k = _ranked(ok, m, max(1, n_ok // count))
+    return (y[k + 2] - y[k + 1]) - (y[k + 1] - y[k])
+
+
+def _ranked(ok, m: int, step: int) -> np.ndarray:
+    """Positions of every ``step``-th True of the mask ``ok(lo, hi)`` over ``[0, m)``."""
+    parts, rank = [], 0
+    for lo in range(0, m, _SAMPLE_BLOCK):
+        g = np.flatnonzero(ok(lo, min(lo + _SAMPLE_BLOCK, m)))
+        parts.append(lo + g[(-rank) % step::step])
+        rank += g.size
+    return np.concatenate(parts) if parts else np.zeros(0, dtype=np.int64)
 
 
 def bridge_gaps(y: np.ndarray, bad: np.ndarray, degree: int = 4) -> np.ndarray:
