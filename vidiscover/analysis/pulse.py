@@ -74,7 +74,7 @@ from ..acquisition import (
     shape_centroid,
 )
 from ..errors import InputError
-from .signals import bridge_gaps, fill_gaps, robust_std, savgol_smooth
+from .signals import bridge_gaps, fill_gaps, robust_std, savgol_smooth, second_difference_sample
 
 __all__ = ["PulseModel", "PulseResponse", "learn_pulse"]
 
@@ -564,11 +564,11 @@ def _strong_pulses(af: np.ndarray, bad: np.ndarray, fs: float, n_pulses: int,
     win = max(7, int(round(smooth_ms * 1e-3 * fs)) | 1)
     if win > n:
         win = n if n % 2 else n - 1
-    d2 = np.diff(af, 2)[~(bad[2:] | bad[1:-1] | bad[:-2])]
-    sigma = robust_std(d2[:: max(1, d2.size // 8192)]) / math.sqrt(6.0)
+    sigma = robust_std(second_difference_sample(af, bad)) / math.sqrt(6.0)
     if not sigma > 0:
         return np.zeros(0, dtype=np.int64), np.zeros((0, pre + post + 1)), sigma, np.zeros(0)
-    signed = af - savgol_smooth(af, win)
+    signed = savgol_smooth(af, win)          # (in place: full-length arrays are large)
+    np.subtract(af, signed, out=signed)
     resid = np.abs(signed)
     resid[bad] = 0.0
     idx = np.flatnonzero(resid > min_snr * sigma)
@@ -612,6 +612,7 @@ def _strong_pulses(af: np.ndarray, bad: np.ndarray, fs: float, n_pulses: int,
             walls[int(signed[i] < 0)].append(i)
         if min(len(walls[0]), len(walls[1])) >= half:
             break
+    del signed, resid, taken
     keep = [max(half, n_pulses - len(walls[1])), max(half, n_pulses - len(walls[0]))]
     peaks = np.array(sorted(walls[0][:keep[0]] + walls[1][:keep[1]]), dtype=np.int64)
     if peaks.size == 0:
@@ -833,7 +834,7 @@ def learn_pulse(a: np.ndarray, fs: float, bad: np.ndarray | None = None, *,
     a = np.asarray(a, dtype=float)
     nan = ~np.isfinite(a)
     bad = nan if bad is None else (np.asarray(bad, dtype=bool) | nan)
-    af = fill_gaps(a, bad)
+    af = fill_gaps(a, bad) if bad.any() else a        # (read only: no copy when not needed)
     fs = float(fs)
     pre, post = _window(fs)
     isolation = max(int(isolation), int(round(isolation * fs / 6400.0)))
