@@ -39,6 +39,7 @@ __all__ = ["eq8_velocities", "solve_flights", "integrate_flights", "FlightSoluti
 
 #: Integration steps per flight of :func:`solve_flights`.
 STEPS = 96
+_PART = 2048          # flights solved together by :func:`solve_flights`
 
 
 def eq8_velocities(t_s: np.ndarray, t_e: np.ndarray, y_s: np.ndarray, y_e: np.ndarray,
@@ -174,6 +175,11 @@ def integrate_flights(t_s: np.ndarray, t_e: np.ndarray, y_s: np.ndarray, w_s: np
     return np.asarray(y_s, float) + Y[:, 0], W[:, 0]
 
 
+def _part(v, n: int, sl: slice):
+    """Rows ``sl`` of a per-flight value (an array of ``n``, a scalar, or None)."""
+    return None if v is None else np.broadcast_to(np.asarray(v, dtype=float), (n,))[sl]
+
+
 def solve_flights(t_s: np.ndarray, t_e: np.ndarray, y_s: np.ndarray, y_e: np.ndarray,
                   lo_velocity, lo_acceleration, mu: float, v_start: np.ndarray | None = None,
                   v_end: np.ndarray | None = None, candidates: int = 16,
@@ -209,6 +215,21 @@ def solve_flights(t_s: np.ndarray, t_e: np.ndarray, y_s: np.ndarray, y_e: np.nda
         z = np.zeros(0)
         return FlightSolution(z, z, z, np.zeros(0, dtype=np.int64), np.zeros((0, M + 1)),
                               np.zeros((0, M + 1)), np.zeros((0, M + 1)))
+    if F > _PART:
+        # flights are independent: solve them a part at a time (the temporaries of the
+        # integration are several times the result; a long record has many flights)
+        out = FlightSolution(np.empty(F), np.empty(F), np.empty(F),
+                             np.empty(F, dtype=np.int64), np.empty((F, M + 1)),
+                             np.empty((F, M + 1)), np.empty((F, M + 1)))
+        for lo in range(0, F, _PART):
+            sl = slice(lo, lo + _PART)
+            part = solve_flights(t_s[sl], t_e[sl], y_s[sl], y_e[sl], lo_velocity,
+                                 lo_acceleration, mu,
+                                 _part(v_start, F, sl), _part(v_end, F, sl),
+                                 candidates, steps)
+            for name in ("w_start", "w_end", "closure", "sign_changes", "t", "y", "w"):
+                getattr(out, name)[sl] = getattr(part, name)
+        return out
     T, V, A, h = _grid(t_s, t_e, lo_velocity, lo_acceleration, v_start, v_end, M)
     dt = t_e - t_s
     w_mean = (y_e - y_s) / dt

@@ -62,6 +62,8 @@ IMPACT_STATE_COLUMNS = ("t", "side", "x", "y", "v_minus", "v_plus", "dv", "w_min
 
 _BLOCK = 16                 # samples per block of the drift smoother
 _PEN_STEP = 4               # wall penetration is checked every _PEN_STEP samples
+_PEN_PART = 1 << 16         # checked samples per part (bounds the temporaries)
+_PART = 1 << 16             # samples per part of the drift's evaluation
 
 
 @dataclass(frozen=True, eq=False)
@@ -235,36 +237,47 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
     X_s[0] = 0.0
     np.cumsum(0.5 * (V_s[1:] + V_s[:-1]) * dt, out=X_s[1:])
     ti = t_imp - t[0]
+    # states at the impacts: linear interpolation between the samples about them
+    # (taken from each full-length array as soon as it is made, so it can be dropped)
+    k = np.clip(np.searchsorted(tr, ti, side="right") - 1, 0, n - 2)
+    f = (ti - tr[k]) * fs
+    lin = lambda arr: arr[k] * (1 - f) + arr[k + 1] * f          # noqa: E731
     cdv = np.concatenate([[0.0], np.cumsum(dv)])
     cdvt = np.concatenate([[0.0], np.cumsum(dv * ti)])
     # jumps of the impacts strictly before each sample, as running sums
     first = np.minimum(np.floor(ti * fs).astype(np.int64) + 1, n)
     first += (first < n) & (first > 0) & (tr[np.clip(first - 1, 0, n - 1)] > ti)
-    S = np.cumsum(np.bincount(first, weights=dv, minlength=n + 1)[:n])
-    SdT = np.cumsum(np.bincount(first, weights=dv * ti, minlength=n + 1)[:n])
     # (full-length arrays are combined in place and dropped when done: a long record
     # holds millions of samples per array)
+    S = np.bincount(first, weights=dv, minlength=n + 1)[:n]
+    np.cumsum(S, out=S)
+    lin_X, lin_V = lin(X_s), lin(V_s)
     X_raw = S * tr
     X_raw += X_s                     # the operations and their order of X_s + S tr - SdT
-    X_raw -= SdT
+    del X_s
+    SdT = np.bincount(first, weights=dv * ti, minlength=n + 1)[:n]
+    X_raw -= np.cumsum(SdT, out=SdT)
     del SdT
     xl = np.asarray(rec.x, dtype=float)
     okx = np.isfinite(xl)
     if not okx.any():
         raise InputError(f"{rec.name}: column 'x' has no finite value; the laser "
                          "displacement is needed to reconstruct the motion")
-    e = np.subtract(xl, X_raw, out=np.zeros(n), where=okx)
-    D, Dd = _drift(tr, e, okx, fs, drift_window)
-    del e
-    x_f = X_raw
-    x_f += D
+    drift = _drift(tr, xl, X_raw, okx, fs, drift_window)     # D and Dd at any times
+    lin_D = drift(tr[k])[0] * (1 - f) + drift(tr[k + 1])[0] * f           # lin(D), lin(Dd)
+    lin_Dd = drift(tr[k])[1] * (1 - f) + drift(tr[k + 1])[1] * f
+    x_f = X_raw                      # X_raw + D
     del X_raw
-    VD = V_s + Dd                    # the LO velocity between the jumps
-    v_f = V_s + S
-    v_f += Dd
+    v_f = np.add(V_s, S, out=S)      # V_s + S + Dd
     del S
-    xl_f = fill_gaps(xl, ~okx) if not okx.all() else xl
-    v_disp = _gradient(xl_f, dt)
+    VD = V_s                         # V_s + Dd: the LO velocity between the jumps
+    del V_s
+    for lo in range(0, n, _PART):    # D and Dd by parts: never whole
+        part = slice(lo, lo + _PART)
+        D, Dd = drift(tr[part])
+        x_f[part] += D
+        VD[part] += Dd
+        v_f[part] += Dd
     if okx.all():
         step = max(1, n // 8192)
         resid = xl[::step] - x_f[::step]
@@ -274,13 +287,9 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
     position_noise = max(robust_std(resid), 1e-9)
 
     # ---- states at the impacts
-    k = np.clip(np.searchsorted(tr, ti, side="right") - 1, 0, n - 2)
-    f = (ti - tr[k]) * fs
-    lin = lambda arr: arr[k] * (1 - f) + arr[k + 1] * f          # noqa: E731
     before = cdv[:-1]                                          # jumps strictly before
-    x_imp = lin(X_s) + before * ti - cdvt[:-1] + lin(D)
-    v_minus = lin(V_s) + before + lin(Dd)
-    del X_s, D, V_s, Dd
+    x_imp = lin_X + before * ti - cdvt[:-1] + lin_D
+    v_minus = lin_V + before + lin_Dd
     v_plus = v_minus + dv
     y_imp = x_imp + side * b
 
@@ -292,6 +301,11 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
 
     flights, traj = _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f,
                              det.baseline, fs, stick_tol, lo_velocity, lo_acc)
+    del lo_velocity, lo_acc
+    VD = None                        # (dropped before the next full-length array)
+    xl_f = fill_gaps(xl, ~okx) if not okx.all() else xl
+    v_disp = _gradient(xl_f, dt)
+    del xl_f
     m = t_imp.size
     w_minus = np.full(m, np.nan)
     w_plus = np.full(m, np.nan)
@@ -327,20 +341,30 @@ def _gradient(y: np.ndarray, h: float) -> np.ndarray:
     return out
 
 
-def _drift(tr, e, ok, fs, window):
-    """Slow drift D (m) and its derivative (m/s) of the residual ``e``.
+def _drift(tr, xl, x_raw, ok, fs, window):
+    """Slow drift D (m) and its derivative (m/s) of the residual ``e = xl - x_raw``.
 
-    By a local quadratic (Savitzky-Golay) smoother of block means.
+    By a local quadratic (Savitzky-Golay) smoother of block means of ``e`` over the
+    ``ok`` samples (the residual is formed a few thousand blocks at a time). Returns
+    the function ``times (s from the first sample) -> (D, Dd)`` (point by point).
     """
     n = tr.size
     B = _BLOCK if n >= 8 * _BLOCK else 1
     nb = n // B
     cut = nb * B
-    eb = (e[:cut] * ok[:cut]).reshape(nb, B).sum(axis=1)
+
+    def e(lo, hi):
+        return np.subtract(xl[lo:hi], x_raw[lo:hi], out=np.zeros(hi - lo), where=ok[lo:hi])
+
+    eb = np.empty(nb)
+    step = B * 4096
+    for lo in range(0, cut, step):
+        hi = min(lo + step, cut)
+        eb[lo // B:hi // B] = (e(lo, hi) * ok[lo:hi]).reshape(-1, B).sum(axis=1)
     cb = ok[:cut].reshape(nb, B).sum(axis=1)
     tb = tr[:cut].reshape(nb, B).mean(axis=1)
     if cut < n:                                  # the tail as one more block
-        eb = np.append(eb, (e[cut:] * ok[cut:]).sum())
+        eb = np.append(eb, (e(cut, n) * ok[cut:]).sum())
         cb = np.append(cb, ok[cut:].sum())
         tb = np.append(tb, tr[cut:].mean())
     good = cb > 0
@@ -352,16 +376,23 @@ def _drift(tr, e, ok, fs, window):
     win = max(5, min(win, mean.size if mean.size % 2 else mean.size - 1))
     if mean.size < 5:
         c = np.polyfit(tb, mean, min(1, mean.size - 1)) if mean.size > 1 else np.r_[mean]
-        D = np.polyval(c, tr)
-        Dd = np.polyval(np.polyder(c), tr) if c.size > 1 else np.zeros(n)
-        return D, Dd
+
+        def poly(x):
+            return (np.polyval(c, x),
+                    np.polyval(np.polyder(c), x) if c.size > 1 else np.zeros(x.size))
+
+        return poly
     Db, Ddb = _quadratic_smoother(mean, win, h)
-    D = np.interp(tr, tb, Db)
-    Dd = np.interp(tr, tb, Ddb)
-    # beyond the first/last block centre: extrapolate along the local slope
-    for sel, k in ((tr < tb[0], 0), (tr > tb[-1], -1)):
-        D[sel] = Db[k] + Ddb[k] * (tr[sel] - tb[k])
-    return D, Dd
+
+    def smooth(x):
+        D = np.interp(x, tb, Db)
+        Dd = np.interp(x, tb, Ddb)
+        # beyond the first/last block centre: extrapolate along the local slope
+        for sel, k in ((x < tb[0], 0), (x > tb[-1], -1)):
+            D[sel] = Db[k] + Ddb[k] * (x[sel] - tb[k])
+        return D, Dd
+
+    return smooth
 
 
 @functools.lru_cache(maxsize=8)
@@ -443,6 +474,7 @@ def _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f, acc, fs,
             trel = np.maximum(trel, ts[sel])
             t_rel[sel] = np.where(inside, trel, ts[sel])
             found[sel] = inside
+        del rel_left, rel_right, rel
     cand &= found
     x_rel = np.interp(t_rel - t0, t - t0, x_f)
     v_rel = lo_velocity(t_rel)
@@ -478,7 +510,7 @@ def _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f, acc, fs,
         w_start = sol.w_start.copy()
         w_end = sol.w_end.copy()
         changes = sol.sign_changes.copy()
-        T, Y, W = sol.t.copy(), sol.y.copy(), sol.w.copy()
+        T, Y, W = sol.t, sol.y, sol.w          # (sol's own arrays: not used elsewhere)
         if stick.any():
             si = np.flatnonzero(stick)
             pos = np.searchsorted(np.flatnonzero(cand), si)
@@ -517,20 +549,30 @@ def _penetration(t, x_f, ts, te, t_release, y_release, w_line, ss, b, traj, mu, 
     out = np.zeros(nf)
     if cnt.sum() == 0:
         return out
-    fl = np.repeat(np.arange(nf), cnt)
-    idx = (np.arange(cnt.sum()) - np.repeat(np.cumsum(cnt) - cnt, cnt) + np.repeat(k0, cnt)) * step
-    tt = t[idx]
-    if mu == 0.0:
-        tr = t_release[fl]
-        y = np.where(tt < tr, x_f[idx] + ss[fl] * b, y_release[fl] + w_line[fl] * (tt - tr))
-    else:
-        T, Y = traj["t"], traj["y"]
-        pos = (tt - T[fl, 0]) / (T[fl, -1] - T[fl, 0]) * (T.shape[1] - 1)
-        pos = np.clip(pos, 0, T.shape[1] - 1 - 1e-9)
-        i0 = pos.astype(int)
-        f = pos - i0
-        y = Y[fl, i0] * (1 - f) + Y[fl, i0 + 1] * f
-    z = y - x_f[idx]
-    exc = np.maximum(np.abs(z) - b, 0.0)
-    np.maximum.at(out, fl, exc)
+    # a few hundred thousand samples at a time (whole flights: each flight's maximum
+    # is taken within one part)
+    csum = np.cumsum(cnt)
+    a = 0
+    while a < nf:
+        stop = max(a + 1, int(np.searchsorted(csum, csum[a] - cnt[a] + _PEN_PART,
+                                              side="right")))
+        sl = slice(a, stop)
+        a = stop
+        c, k = cnt[sl], k0[sl]
+        fl = np.repeat(np.arange(nf)[sl], c)
+        idx = (np.arange(c.sum()) - np.repeat(np.cumsum(c) - c, c) + np.repeat(k, c)) * step
+        tt = t[idx]
+        if mu == 0.0:
+            tr = t_release[fl]
+            y = np.where(tt < tr, x_f[idx] + ss[fl] * b, y_release[fl] + w_line[fl] * (tt - tr))
+        else:
+            T, Y = traj["t"], traj["y"]
+            pos = (tt - T[fl, 0]) / (T[fl, -1] - T[fl, 0]) * (T.shape[1] - 1)
+            pos = np.clip(pos, 0, T.shape[1] - 1 - 1e-9)
+            i0 = pos.astype(int)
+            f = pos - i0
+            y = Y[fl, i0] * (1 - f) + Y[fl, i0 + 1] * f
+        z = y - x_f[idx]
+        exc = np.maximum(np.abs(z) - b, 0.0)
+        np.maximum.at(out, fl, exc)
     return out

@@ -292,6 +292,7 @@ def mu_table(det: ImpactDetection, rec, mus=MU_TABLE, *, b: float | None = None,
         mu = float(mu)
         recon = reconstruct(det, rec, b=b, mu=mu)
         est = estimate_restitution(recon, det, slow_ratio=slow_ratio, **restitution_kw)
+        del recon                       # before the next one: full-length arrays are large
         row = {"mu": mu}
         for side in SIDES:
             w = est.wall(side)
