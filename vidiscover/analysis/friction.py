@@ -170,6 +170,15 @@ def integrate_flights(t_s: np.ndarray, t_e: np.ndarray, y_s: np.ndarray, w_s: np
     t_s, t_e = np.asarray(t_s, float), np.asarray(t_e, float)
     if t_s.size == 0:
         return np.zeros(0), np.zeros(0)
+    F = t_s.size
+    if F > _PART:                   # independent flights: a part at a time (as solve_flights)
+        y_end, w_end = np.empty(F), np.empty(F)
+        for lo in range(0, F, _PART):
+            sl = slice(lo, lo + _PART)
+            y_end[sl], w_end[sl] = integrate_flights(
+                t_s[sl], t_e[sl], _part(y_s, F, sl), _part(w_s, F, sl), lo_velocity,
+                lo_acceleration, mu, _part(v_start, F, sl), _part(v_end, F, sl), steps)
+        return y_end, w_end
     T, V, A, h = _grid(t_s, t_e, lo_velocity, lo_acceleration, v_start, v_end, int(steps))
     Y, W, _, _, _ = _integrate(np.asarray(w_s, float)[:, None], V, A, h, mu)
     return np.asarray(y_s, float) + Y[:, 0], W[:, 0]
