@@ -136,7 +136,8 @@ def run_analyze(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
         Inclination of the rig assumed for the flights (deg; > 0 pulls the ball
         towards the right wall).
     loaded : list of (Recording, GroundTruth or None), optional
-        The recordings already read (by :func:`load_inputs`).
+        The recordings already read (by :func:`load_inputs`); the list is emptied
+        (each recording is released once handed to the analysis).
     channels : dict, optional
         Our names -> the recordings' column/channel names (``--channels``).
 
@@ -167,25 +168,31 @@ def run_analyze(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
     from ..regimes.features import ALL_FEATURES
     from ..report import attach_regime, write_analysis, write_index
 
-    def one(rec, truth, target: Path) -> dict:
-        result, regime = attach_regime(analyze_recording(rec, mu=mu, seed=seed,
+    # the inputs are handed over one by one and not kept: the analysis holds its own
+    # offset-corrected copy of a recording, and a second full copy of a large file
+    # would stay alive for nothing (77 MB of a 200 MB CSV's peak)
+    pending = [list(item) for item in loaded]
+    loaded.clear()
+
+    def one(k: int, target: Path) -> dict:
+        truth = pending[k][1]
+        result, regime = attach_regime(analyze_recording(pending[k].pop(0), mu=mu, seed=seed,
                                                          flight_law=law,
                                                          features=ALL_FEATURES), model)
+        pending[k] = None
         written = write_analysis(result, target, figures=figures, truth=truth,
                                  regime=regime)
         return {**written["summary"], "out": str(target), "files": written["files"]}
 
     if len(paths) == 1:
-        rec, truth = loaded[0]
-        return [one(rec, truth, out)]
+        return [one(0, out)]
     docs = []
     stems = _unique_stems(paths)
     with atomic_directory(out) as tmp:
-        bar = tqdm(list(zip(stems, loaded, strict=True)), desc="analyze", unit="rec",
-                   disable=not progress)
-        for stem, (rec, truth) in bar:
+        bar = tqdm(list(enumerate(stems)), desc="analyze", unit="rec", disable=not progress)
+        for k, stem in bar:
             bar.set_postfix_str(stem)
-            doc = one(rec, truth, tmp / stem)
+            doc = one(k, tmp / stem)
             doc["out"] = str(out / stem)
             docs.append(doc)
         write_index([{"href": f"{stem}/report.html", "summary": d}
