@@ -35,9 +35,12 @@ def _stage_times(values, settle, duration, sample):
     """Median per-point time of each stage over ``sample`` points (serial)."""
     from vidiscover import preset
     from vidiscover.analysis import analyze
+    from vidiscover.effects import Effects
+    from vidiscover.regimes.features import ALL_FEATURES
     from vidiscover.regimes.labels import label_simulation
     from vidiscover.sensors import SensorConfig, record
     from vidiscover.simulation import simulate
+    from vidiscover.workflows import known_pulse
 
     stages = {"simulate": [], "record": [], "label": [], "analyze": []}
     for b in np.asarray(values)[np.linspace(0, len(values) - 1, sample).astype(int)]:
@@ -48,7 +51,7 @@ def _stage_times(values, settle, duration, sample):
         t2 = time.perf_counter()
         label_simulation(res)
         t3 = time.perf_counter()
-        analyze(rec, n_boot=0)
+        analyze(rec, n_boot=0, features=ALL_FEATURES, pulse=known_pulse(None, Effects()))
         t4 = time.perf_counter()
         for k, dt in zip(stages, (t1 - t0, t2 - t1, t3 - t2, t4 - t3)):
             stages[k].append(dt)
