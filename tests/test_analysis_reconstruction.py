@@ -159,3 +159,24 @@ def test_laser_without_values_is_an_input_error():
         reconstruct(det, bad)
     with pytest.raises(InputError, match="mu must be in"):
         reconstruct(det, rec, mu=-0.1)
+
+
+def test_a_recording_without_impacts_is_analysed():
+    """No impact at all (a ball at rest in a wide clearance: the gap diagnosis's
+    candidate models produce such recordings): the LO motion is still reconstructed,
+    the tables are empty, nothing fails (bincount of no impacts is an integer array)."""
+    from vidiscover.analysis import analyze
+    from vidiscover.io import Metadata
+
+    fs = 6400.0
+    t = np.arange(32768) / fs
+    rng = np.random.default_rng(3)
+    xe = 1e-4 * np.sin(2 * np.pi * 8 * t)
+    x = 3e-4 * np.sin(2 * np.pi * 8 * t) + 1e-6 * rng.standard_normal(t.size)
+    a = -(2 * np.pi * 8) ** 2 * 3e-4 * np.sin(2 * np.pi * 8 * t) + 0.05 * rng.standard_normal(
+        t.size)
+    out = analyze(Recording(t, x, a, xe, Metadata(b=0.02, sample_rate=fs)),
+                  n_boot=0)
+    assert out.detection.n == 0 and out.reconstruction.n_flights == 0
+    assert out.reconstruction.v.dtype == np.float64
+    assert np.max(np.abs(out.reconstruction.x - x)) < 2e-5

@@ -249,13 +249,14 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
     first += (first < n) & (first > 0) & (tr[np.clip(first - 1, 0, n - 1)] > ti)
     # (full-length arrays are combined in place and dropped when done: a long record
     # holds millions of samples per array)
-    S = np.bincount(first, weights=dv, minlength=n + 1)[:n]
+    # (float even without impacts: bincount of no weights is an integer array)
+    S = np.bincount(first, weights=dv, minlength=n + 1)[:n].astype(float, copy=False)
     np.cumsum(S, out=S)
     lin_X, lin_V = lin(X_s), lin(V_s)
     X_raw = S * tr
     X_raw += X_s                     # the operations and their order of X_s + S tr - SdT
     del X_s
-    SdT = np.bincount(first, weights=dv * ti, minlength=n + 1)[:n]
+    SdT = np.bincount(first, weights=dv * ti, minlength=n + 1)[:n].astype(float, copy=False)
     X_raw -= np.cumsum(SdT, out=SdT)
     del SdT
     xl = np.asarray(rec.x, dtype=float)
