@@ -403,9 +403,7 @@ def reconstruct_with_law(analysis, law) -> dict:
     Returns
     -------
     dict
-        Arrays over the flights of kind ``"free"``: ``flight`` (row in the flight
-        table), ``t_start``, ``t_end``, ``w_start``, ``w_end`` (m/s), ``zd_start``,
-        ``zd_end`` (relative velocities, m/s), ``sign_changes``.
+        As :func:`~vidiscover.analysis.flights.solve_free_flights`.
     """
     mu, theta = flight_law_mu_theta(law) if isinstance(law, FlightLawResult) else (
         max(float(law[0]), 0.0), float(law[1]))
