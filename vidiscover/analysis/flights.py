@@ -187,15 +187,14 @@ def solve_free_flights(data: FlightData, mu: float, theta_deg: float) -> dict:
         ``zd_end`` (relative velocities, m/s), ``sign_changes``.
     """
     mu, theta = max(float(mu), 0.0), float(theta_deg)
-    rec = data
-    k = np.flatnonzero(rec.kind == "free")
-    v0, v1 = rec.v_plus[rec.i_s[k]], rec.v_minus[rec.i_e[k]]
-    fl = reconstruct_flights(rec.ts[k], rec.te[k], rec.y_imp[rec.i_s[k]],
-                             rec.y_imp[rec.i_e[k]], v0, v1, rec.lo_velocity,
-                             rec.lo_acceleration, mu, theta)
+    k = np.flatnonzero(data.kind == "free")
+    v0, v1 = data.v_plus[data.i_s[k]], data.v_minus[data.i_e[k]]
+    fl = reconstruct_flights(data.ts[k], data.te[k], data.y_imp[data.i_s[k]],
+                             data.y_imp[data.i_e[k]], v0, v1, data.lo_velocity,
+                             data.lo_acceleration, mu, theta)
     zd = fl["zd"]
     nz = np.where(zd == 0, 0.0, np.sign(zd))
     changes = np.array([int(np.count_nonzero(np.diff(r[r != 0]))) for r in nz], dtype=np.int64)
-    return {"flight": k, "t_start": rec.ts[k], "t_end": rec.te[k], "w_start": fl["w"][:, 0],
+    return {"flight": k, "t_start": data.ts[k], "t_end": data.te[k], "w_start": fl["w"][:, 0],
             "w_end": fl["w"][:, -1], "zd_start": fl["w"][:, 0] - v0,
             "zd_end": fl["w"][:, -1] - v1, "sign_changes": changes}

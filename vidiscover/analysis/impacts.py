@@ -77,6 +77,7 @@ from .signals import (
     robust_std,
     savgol_smooth,
     second_difference_sample,
+    true_runs,
 )
 
 __all__ = ["PulseModel", "ImpactDetection", "detect_impacts", "IMPACT_COLUMNS"]
@@ -353,7 +354,7 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         # a run of clipped samples is a pulse too strong to read: seed a candidate at
         # its centre and ignore first-round peaks around it (filter artefacts of the
         # masked samples); later rounds see the fitted pulse
-        runs = [(lo, hi) for lo, hi in _runs(clip) if hi - lo <= _MAX_CLIP_RUN]
+        runs = [(lo, hi) for lo, hi in true_runs(clip) if hi - lo <= _MAX_CLIP_RUN]
         if runs:
             centres = np.array([(lo + hi - 1) / 2.0 for lo, hi in runs])
             near = (np.abs(first[:, None] - centres[None, :]).min(axis=1) <= hw
@@ -468,7 +469,7 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
     if clip.any():
         warnings.append(f"{int(clip.sum())} clipped acceleration sample(s): pulse areas of "
                         "clipped impacts are fitted on the unclipped samples (reliable=False)")
-        long_runs = sum(1 for lo, hi in _runs(clip) if hi - lo > _MAX_CLIP_RUN)
+        long_runs = sum(1 for lo, hi in true_runs(clip) if hi - lo > _MAX_CLIP_RUN)
         if long_runs:
             warnings.append(f"the accelerometer saturates over {long_runs} stretch(es) longer "
                             f"than {_MAX_CLIP_RUN} samples: the range is too small for this "
@@ -570,12 +571,6 @@ def _largest_near(pos: np.ndarray, amp: np.ndarray, idx: np.ndarray, tol: float 
         if near.any():
             best = max(best, float(np.abs(amp[kk[near]]).max()))
     return best
-
-
-def _runs(mask: np.ndarray) -> list[tuple[int, int]]:
-    """(start, stop) of the runs of True in ``mask``."""
-    d = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
-    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
 
 
 _BLOCK = 1 << 16          # samples per block of the element-wise full-length steps

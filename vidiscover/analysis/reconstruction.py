@@ -265,8 +265,8 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
         raise InputError(f"{rec.name}: column 'x' has no finite value; the laser "
                          "displacement is needed to reconstruct the motion")
     drift = _drift(tr, xl, X_raw, okx, fs, drift_window)     # D and Dd at any times
-    lin_D = drift(tr[k])[0] * (1 - f) + drift(tr[k + 1])[0] * f           # lin(D), lin(Dd)
-    lin_Dd = drift(tr[k])[1] * (1 - f) + drift(tr[k + 1])[1] * f
+    (D0, Dd0), (D1, Dd1) = drift(tr[k]), drift(tr[k + 1])     # about each impact
+    lin_D, lin_Dd = D0 * (1 - f) + D1 * f, Dd0 * (1 - f) + Dd1 * f    # lin(D), lin(Dd)
     x_f = X_raw                      # X_raw + D
     del X_raw
     v_f = np.add(V_s, S, out=S)      # V_s + S + Dd

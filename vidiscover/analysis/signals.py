@@ -195,6 +195,12 @@ def _ranked(ok, m: int, step: int) -> np.ndarray:
     return np.concatenate(parts) if parts else np.zeros(0, dtype=np.int64)
 
 
+def true_runs(mask: np.ndarray) -> list[tuple[int, int]]:
+    """(start, stop) of the runs of True in ``mask``."""
+    d = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
+    return list(zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)))
+
+
 def bridge_gaps(y: np.ndarray, bad: np.ndarray, degree: int = 4) -> np.ndarray:
     """Copy of ``y`` with each run of ``bad`` samples bridged by a local polynomial.
 
@@ -211,8 +217,7 @@ def bridge_gaps(y: np.ndarray, bad: np.ndarray, degree: int = 4) -> np.ndarray:
     if not bad.any():
         return out
     n = out.size
-    d = np.diff(np.concatenate([[0], bad.astype(np.int8), [0]]))
-    for lo, hi in zip(np.flatnonzero(d == 1), np.flatnonzero(d == -1)):
+    for lo, hi in true_runs(bad):
         if lo == 0 or hi == n:
             continue
         k = max((hi - lo + 1) // 2, 8)

@@ -166,9 +166,6 @@ class SimulationResult:
         state["_evaluated"] = []
         return state
 
-    def __setstate__(self, state: dict) -> None:
-        self.__dict__.update(state)
-
     @property
     def impulsive(self) -> bool:
         """True when impacts are instantaneous (the exact engine).
