@@ -127,7 +127,6 @@ DEFAULT_LIBRARY = ("1", "sgn(z')", "z'", "z'|z'|", "z'^3")
 
 _FRICTION = "sgn(z')"
 _CONSTANT = "1"
-_STEPS = STEPS              # integration steps per flight
 _MAX_ITER = 8
 _N_THRESHOLDS = 12
 _MAX_MISFIT = 0.01          # largest RMS residual / RMS ball velocity jump
@@ -414,7 +413,7 @@ def reconstruct_with_law(analysis, law) -> dict:
 class _Tents:
     """Rows of the weak form, one per usable impact, across recordings."""
 
-    def __init__(self, records, library: tuple[str, ...], steps: int = _STEPS) -> None:
+    def __init__(self, records, library: tuple[str, ...], steps: int = STEPS) -> None:
         self.records = records
         self.steps = int(steps)
         self.library = library
@@ -628,11 +627,12 @@ def _standard_errors(X: np.ndarray, Y: np.ndarray, floor: float) -> tuple[float,
     return float(se_f / G_ACCEL), float(np.degrees(se_c / G_ACCEL / math.sqrt(1 - s * s)))
 
 
-def _wall_scale_test(X: np.ndarray, Y: np.ndarray, scale_cols: np.ndarray,
-                     floor: float) -> tuple[float, float, float]:
+def _wall_scale_test(X: np.ndarray, Y: np.ndarray, scale_cols: np.ndarray, floor: float,
+                     cx: np.ndarray | None = None) -> tuple[float, float, float]:
     """How the (constant, friction) fit moves when each wall's pulse areas get a scale.
 
-    ``scale_cols`` are the jumps per wall (:meth:`_Tents.wall_jumps`): the fit with
+    ``cx``: the least-squares fit of ``X`` alone (the tied fit), when the caller has
+    it. ``scale_cols`` are the jumps per wall (:meth:`_Tents.wall_jumps`): the fit with
     them free is the law that holds whatever scale error a wall's pulse areas carry
     (the filter, that wall's contact duration). Without such an error both fits
     estimate the same law and their difference is noise of covariance (free fit's
@@ -647,7 +647,8 @@ def _wall_scale_test(X: np.ndarray, Y: np.ndarray, scale_cols: np.ndarray,
     if n <= Z.shape[1] + 1:
         return 0.0, 0.0, 0.0
     cz = np.linalg.lstsq(Z, Y, rcond=None)[0]
-    cx = np.linalg.lstsq(X, Y, rcond=None)[0]
+    if cx is None:
+        cx = np.linalg.lstsq(X, Y, rcond=None)[0]
     s2 = max(float(np.sum((Y - Z @ cz) ** 2)) / (n - Z.shape[1]), floor ** 2)
     try:
         Vz = s2 * np.linalg.inv(Z.T @ Z)[:k, :k]
@@ -857,16 +858,17 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
         reasons.append(f"friction and inclination are confounded: the reconstruction also "
                        f"closes with {alt} about as well; pool recordings at several "
                        "clearances")
+    # the (constant, friction) least squares, mu not constrained
+    unconstrained = np.linalg.lstsq(Theta[:, [jc, jf]], Y, rcond=None)[0]
     hausman, dmu, dth = _wall_scale_test(Theta[:, [jc, jf]], Y, tents.wall_jumps(),
-                                         precision * jrms)
+                                         precision * jrms, cx=unconstrained)
     notes = []
     if hausman > _HAUSMAN and (dmu > MAX_MU_SE or dth > MAX_THETA_SE):
         (reasons if _SCALE_TEST else notes).append(
             f"the pulse areas of the walls disagree in scale: with one free scale per wall "
             f"the fit moves by {dmu:.2g} in mu and {dth:.2g} deg in theta (significant: "
             f"chi2 {hausman:.3g} > {_HAUSMAN:g})")
-    mu_free = _mu_theta((_CONSTANT, _FRICTION),
-                        np.linalg.lstsq(Theta[:, [jc, jf]], Y, rcond=None)[0])[0]
+    mu_free = _mu_theta((_CONSTANT, _FRICTION), unconstrained)[0]
     if _CONSTRAINED and mu_free < -2.0 * mu_se:
         reasons.append(f"the fit wants a negative friction, mu = {mu_free:.3g} (beyond twice "
                        f"its standard error {mu_se:.2g}): mu >= 0 does not close the tents")

@@ -685,7 +685,7 @@ def discover_impact_law(v, r, *, seed: int = 0, n_boot: int = 200, groups=None,
         best = int(np.argmin(aicc))
         w = sw ** 2 if rows is None else sw[rows] ** 2
         precision = math.sqrt(rss[best] / float(np.sum(w)))
-        threshold = max(min_effect, EFFECT_PER_SCATTER * precision, EFFECT_PER_SIGMA * ends)
+        threshold = _effect_threshold(min_effect, precision, ends)
         return rss, aicc, cvs, curves, threshold, precision
 
     rss, aicc, cvs, curves, threshold, precision = score()
@@ -786,6 +786,15 @@ def _f_test(design: _Design, r: np.ndarray, alt: _Candidate, rss0: float,
     return float(stats.f.sf(f_stat, len(extra), dof))
 
 
+def _effect_threshold(min_effect: float, precision: float, end_error: float) -> float:
+    """Smallest reported change of r over the observed speeds.
+
+    The largest of ``min_effect``, :data:`EFFECT_PER_SCATTER` x the scatter about the
+    law and :data:`EFFECT_PER_SIGMA` x the standard error at the ends.
+    """
+    return max(min_effect, EFFECT_PER_SCATTER * precision, EFFECT_PER_SIGMA * end_error)
+
+
 def _end_error(v: np.ndarray, sig: np.ndarray | None) -> float:
     """Standard error of a change of r across the observed speeds (0 without ``sig``).
 
@@ -848,6 +857,5 @@ def _fallback(v: np.ndarray, r: np.ndarray, sw: np.ndarray, *, n_dropped: int,
         n_outliers=n_outliers, sigma=float(np.sqrt(np.mean((r - r0) ** 2))),
         support_frequency=math.nan, selection_frequency={},
         criterion=criterion, level=float(level), warning=warning, boot_coefficients=boot,
-        effect=0.0, effect_threshold=max(min_effect, EFFECT_PER_SCATTER * precision,
-                                         EFFECT_PER_SIGMA * end_error),
+        effect=0.0, effect_threshold=_effect_threshold(min_effect, precision, end_error),
         precision=precision)
