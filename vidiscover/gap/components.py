@@ -243,8 +243,10 @@ def _flight_drag(rec, an, w: float) -> tuple[float, float]:
         dcols += [n * w * c_, -n * w * s_]
     xe = np.asarray(rec.xe, dtype=float)
     ok = np.isfinite(xe)
-    coef = np.linalg.lstsq(np.column_stack(cols)[ok], xe[ok], rcond=None)[0]
-    xe_fit, ve_fit = np.column_stack(cols) @ coef, np.column_stack(dcols) @ coef
+    C = np.column_stack(cols)
+    coef = np.linalg.lstsq(C[ok], xe[ok], rcond=None)[0]
+    xe_fit, ve_fit = C @ coef, np.column_stack(dcols) @ coef
+    del C
     # the laser's displacement: the integrated acceleration lags with a causal
     # anti-alias filter (a Butterworth chain read 0.18 on no-effect compliant walls)
     x = np.asarray(rec.x, dtype=float)

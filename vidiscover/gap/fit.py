@@ -477,6 +477,12 @@ CANDIDATES = {
 }
 
 
+def _validation_speeds(model: Model, effects: Effects) -> list[float]:
+    """Initial ball speeds of the validation draws (see :func:`validation_signature`)."""
+    speeds = [model.ball_speed, model.alt_speed]
+    return speeds if symmetric(effects) else speeds + [-v for v in speeds]
+
+
 def validation_signature(model: Model, effects: Effects, r: float | None = None
                          ) -> Signature:
     """The validation draw of a model.
@@ -491,14 +497,10 @@ def validation_signature(model: Model, effects: Effects, r: float | None = None
     against the effect (in the battery such draws made a fitted tilt or harmonic
     score worse than the nominal model).
     """
-    speeds = [model.ball_speed, model.alt_speed]
-    sym = symmetric(effects)
-    if not sym:
-        speeds += [-v for v in speeds]
     draws = [simulate_signature(model, effects, r, ball_speed=v * VALIDATION[0],
                                 noise_seed=VALIDATION[1])
-             for v in speeds]
-    if sym:
+             for v in _validation_speeds(model, effects)]
+    if symmetric(effects):
         draws += [mirror(d) for d in draws]
     gaps = [compare(model.real, d, model.rep_var).total for d in draws]
     return draws[int(np.argmin(gaps))]
@@ -536,7 +538,7 @@ def fit_candidate(model: Model, name: str, base: Effects | None = None,
     gap = compare(model.real, sig, model.rep_var)
     return CandidateFit(name=name, params=dict(fx.active[name]), n_params=n_params, r=r,
                         effects=fx, gap=gap, signature=sig,
-                        n_sims=n_sims + (2 if symmetric(fx) else 4))
+                        n_sims=n_sims + len(_validation_speeds(model, fx)))
 
 
 def profile_ci(model: Model, fit: CandidateFit, level_delta: float = 3.84,
