@@ -11,7 +11,8 @@ from vidiscover import cli
 def test_help_lists_every_installed_command_without_importing_them():
     code = ("import sys; from click.testing import CliRunner; from vidiscover.cli import main;"
             "r = CliRunner().invoke(main, ['--help']); print(r.output);"
-            "heavy = [m for m in ('numpy', 'scipy', 'pandas', 'matplotlib', 'sklearn', 'pysindy')"
+            "heavy = [m for m in ('numpy', 'scipy', 'pandas', 'matplotlib', 'sklearn', 'pysindy',"
+            " 'numba')"
             " if m in sys.modules]; print('HEAVY', heavy)")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout
@@ -32,3 +33,15 @@ def test_unknown_command_is_a_usage_error():
     res = CliRunner().invoke(cli.main, ["no-such-command"])
     assert res.exit_code == 2
     assert "No such command" in res.output
+
+
+def test_numba_loads_with_the_first_simulation_not_with_the_package():
+    """The compiled event search costs a numba import (~0.4 s): only simulations pay it."""
+    code = ("import sys; import vidiscover, vidiscover.simulation, vidiscover.analysis;"
+            "print('BEFORE', 'numba' in sys.modules);"
+            "from vidiscover import preset, simulate;"
+            "simulate(preset('paper', b=0.009), settle=0.0, duration=0.2);"
+            "print('AFTER', 'numba' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert "BEFORE False" in out and "AFTER True" in out

@@ -24,20 +24,20 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import brentq
 
 from ..effects import Effects
 from ..errors import InputError
 from ..params import G_ACCEL, SystemParams
 from .flows import BaseMotion, Oscillator
 from .result import SimulationResult
-from .roots import bracketed_newton
 
 __all__ = ["simulate", "SimOptions"]
 
 FLIGHT, STUCK = 0, 1
 _WINDOW = 64  # event-grid intervals evaluated per vectorised window
 RIGHT, LEFT, MIDDLE = 1, -1, 0
+#: the kernel's event kinds (_flight_kernel: RIGHT, LEFT, ZERO, END) as the loop names them
+_KINDS = {1: RIGHT, -1: LEFT, 2: "zero", 3: "end"}
 
 
 @dataclass(frozen=True)
@@ -121,6 +121,12 @@ class _Model:
         self.h = shortest / opt.grid_per_period
         # z and z' of a flight on a window of the event grid, in one product
         self.free_basis = np.vstack(self.free.window_basis(self.h, _WINDOW)[:2])
+        # the constants of the compiled event search (_flight_kernel) of flights and of
+        # the stuck phases (LO and ball moving as one)
+        from ._flight_kernel import pack_model
+        self.flight_consts = pack_model(self.free, self.b, self.h, _WINDOW)
+        self.stuck_consts = pack_model(self.stuck, self.b, self.h, _WINDOW)
+        self.stuck_basis = self.stuck.window_basis(self.h, _WINDOW)[2]
         self.laws = fx.restitution_laws(p.r)
         self.drift = None
         if "restitution_drift" in fx:
@@ -217,26 +223,6 @@ def initial_state(opt: SimOptions, b: float) -> tuple[float, float, float, float
     return x, v, y, w
 
 
-def _after_extremum(p: float, q: float, fp: float, fq: float) -> float:
-    """Root estimate of f on [p, q] when f'(p) = 0: f ~ fp + (fq - fp) ((t - p)/(q - p))^2.
-
-    The secant start is poor there (f is flat at p: Newton from it overshoots and
-    then creeps back, halving the error per step); the root of this parabola is not.
-    """
-    return p + (q - p) * math.sqrt(fp / (fp - fq))
-
-
-def _deflated(f, t0: float):
-    """``f(t) / (t - t0)`` with its derivative, for ``f`` returning (value, derivative)."""
-    def g(t):
-        fv, df = f(t)
-        tau = t - t0
-        if tau == 0.0:
-            return df, 0.0  # the limit; no slope: the root finder bisects
-        return fv / tau, (df - fv / tau) / tau
-    return g
-
-
 class _Loop:
     def __init__(self, model: _Model) -> None:
         self.m = model
@@ -248,6 +234,9 @@ class _Loop:
         self.impacts: list[tuple] = []
         self.sticks: list[tuple] = []
         self.n_events = 0
+        # numba loads only here, with the first simulation, never at import
+        from ._flight_kernel import next_event, stuck_release
+        self._next_event, self._stuck_release = next_event, stuck_release
 
     # ------------------------------------------------------------------ loop
     def run(self) -> SimulationResult:
@@ -316,47 +305,22 @@ class _Loop:
 
     # ------------------------------------------------------------------ flight
     def _flight(self, t0, x0, v0, y0, w0, s, start_wall):
+        """The free flight from ``t0`` to its first event (compiled: ``_flight_kernel``)."""
         m = self.m
-        b, osc = m.b, m.free
-        friction = m.mug > 0.0
         ab = m.gs - m.mug * s
         F0 = m.mu * m.m2 * G_ACCEL * s
-        C1, C2 = osc.coefficients(t0, x0, v0, F0)
-        lo_xv, zf, f_right, f_left, f_zero = self._flight_functions(osc, t0, C1, C2, F0, y0,
-                                                                    w0, ab, b)
-
-        n, h, t_end = _WINDOW, m.h, self.t_end
-        B01 = m.free_basis
-        # a flight that starts with z' = 0 (reversal, release, stuck impact) has a
-        # root of z' at t0 itself: its first interval is always examined, with that
-        # root deflated, so that a quick second reversal is not lost
-        rest = w0 == v0
-        ta = t0
-        while ta < t_end:
-            cz = osc.window_coeffs(ta, t0, C1, C2, F0)
-            tau = ta - t0
-            cz = [-c for c in cz]
-            cz[0] += y0 + w0 * tau + 0.5 * ab * tau * tau
-            cz[1] += w0 + ab * tau
-            cz[2] += 0.5 * ab
-            zz = (B01 @ cz).tolist()
-            z, zd = zz[:n + 1], zz[n + 1:]
-            # candidate intervals: a wall crossed, or an extremum of z inside
-            for k in range(n):
-                zk = z[k + 1]
-                first = k == 0 and rest and ta == t0
-                if not (zk >= b or zk <= -b or zd[k] * zd[k + 1] < 0.0 or first):
-                    continue
-                ev = self._interval(ta + k * h, ta + (k + 1) * h, z[k], zk, zd[k], zd[k + 1],
-                                    t0, start_wall, friction, f_right, f_left, f_zero, zf,
-                                    first)
-                if ev is not None:
-                    te, kind = ev
-                    if te >= t_end:
-                        break
-                    return self._end_flight(te, kind, t0, C1, C2, F0, y0, w0, ab, lo_xv)
-            ta += n * h
-        return self._end_flight(self.t_end, "end", t0, C1, C2, F0, y0, w0, ab, lo_xv)
+        te, kind, x, v, C1, C2 = self._next_event(
+            m.flight_consts, m.free_basis, t0, x0, v0, y0, w0, F0, ab, self.t_end,
+            start_wall, m.mug > 0.0)
+        tau = te - t0
+        y = y0 + w0 * tau + 0.5 * ab * tau * tau
+        w = w0 + ab * tau
+        if kind == RIGHT:
+            y = x + m.b
+        elif kind == LEFT:
+            y = x - m.b
+        self.segs.append((t0, te, FLIGHT, C1, C2, F0, y0, w0, ab, 0.0))
+        return te, x, v, y, w, _KINDS[kind]
 
     @staticmethod
     def _flight_functions(osc, t0, C1, C2, F0, y0, w0, ab, b):
@@ -415,46 +379,6 @@ class _Loop:
 
         return lo_xv, zf, f_right, f_left, f_zero
 
-    def _interval(self, ta, tb, za, zb, zda, zdb, t0, start_wall, friction,
-                  f_right, f_left, f_zero, zf, rest=False):
-        b = self.m.b
-        pieces = [(ta, za, tb, zb, False)]
-        if rest:
-            # z'(t0) = 0: find a root of z'/(t - t0), which starts at z''(t0)
-            g0, g1 = zf(ta)[2], zdb / (tb - ta)
-            if g0 * g1 < 0.0:
-                te = bracketed_newton(_deflated(f_zero, ta), ta, tb, g0, g1)
-                ze = zf(te)[0]
-                pieces = [(ta, za, te, ze, True), (te, ze, tb, zb, False)]
-        elif zda * zdb < 0.0:
-            te = bracketed_newton(f_zero, ta, tb, zda, zdb)
-            ze = zf(te)[0]
-            pieces = [(ta, za, te, ze, True), (te, ze, tb, zb, False)]
-        for i, (p, zp, q, zq, ends_at_extremum) in enumerate(pieces):
-            at_start = abs(p - t0) <= 1e-15 * max(1.0, abs(t0))
-            if not (at_start and start_wall == RIGHT) and zp - b < 0.0 <= zq - b:
-                x0 = _after_extremum(p, q, zp - b, zq - b) if i else None
-                return bracketed_newton(f_right, p, q, zp - b, zq - b, x0=x0), RIGHT
-            if not (at_start and start_wall == LEFT) and zp + b > 0.0 >= zq + b:
-                x0 = _after_extremum(p, q, zp + b, zq + b) if i else None
-                return bracketed_newton(f_left, p, q, zp + b, zq + b, x0=x0), LEFT
-            if ends_at_extremum and friction and q - t0 > 1e-12:
-                return q, "zero"
-        return None
-
-    def _end_flight(self, te, kind, t0, C1, C2, F0, y0, w0, ab, lo_xv):
-        m = self.m
-        _, x, v = lo_xv(te)  # = m.free.state(te, t0, C1, C2, F0)[:2], bit for bit
-        tau = te - t0
-        y = y0 + w0 * tau + 0.5 * ab * tau * tau
-        w = w0 + ab * tau
-        if kind == RIGHT:
-            y = x + m.b
-        elif kind == LEFT:
-            y = x - m.b
-        self.segs.append((t0, te, FLIGHT, C1, C2, F0, y0, w0, ab, 0.0))
-        return te, x, v, y, w, kind
-
     # ------------------------------------------------------------------ impact
     def _impact(self, t, x, v, y, w, side):
         m = self.m
@@ -473,49 +397,11 @@ class _Loop:
 
     # ------------------------------------------------------------------ stuck
     def _stuck(self, t0, x0, v0, y0, where):
+        """A phase with the ball stuck to the LO, up to its release (``_flight_kernel``)."""
         m = self.m
-        osc, F0 = m.stuck, m.m2 * m.gs
+        F0 = m.m2 * m.gs
+        te, s, x, v, C1, C2 = self._stuck_release(
+            m.stuck_consts, m.stuck_basis, t0, x0, v0, F0, m.gs, m.mug, where, self.t_end)
         zc = y0 - x0
-        C1, C2 = osc.coefficients(t0, x0, v0, F0)
-        mug = m.mug
-        if where == RIGHT:
-            def released(q):
-                return q > mug
-        elif where == LEFT:
-            def released(q):
-                return q < -mug
-        else:
-            def released(q):
-                return np.abs(q) > mug
-
-        def qf(t, thr):
-            _, _, a = osc.state(t, t0, C1, C2, F0)
-            return a - m.gs - thr
-
-        n = 64
-        _, _, B2 = osc.window_basis(m.h, n)
-        ta = t0
-        while ta < self.t_end:
-            q = B2 @ osc.window_coeffs(ta, t0, C1, C2, F0) - m.gs
-            rel = released(q)
-            rel[0] = False
-            hits = np.flatnonzero(rel)
-            if hits.size:
-                k = int(hits[0])
-                thr = mug if q[k] > 0 else -mug
-                lo, hi = ta + (k - 1) * m.h, ta + k * m.h
-                if (q[k - 1] - thr) * (q[k] - thr) > 0:   # released already at the start
-                    te = lo
-                else:
-                    te = brentq(qf, lo, hi, args=(thr,), xtol=1e-14, rtol=1e-15)
-                te = min(te, self.t_end)
-                x, v, _ = osc.state(te, t0, C1, C2, F0)
-                self.segs.append((t0, te, STUCK, C1, C2, F0, zc, 0.0, 0.0, 1.0))
-                s = -1 if q[k] > 0 else 1
-                if te >= self.t_end:
-                    s = 0
-                return te, x, v, x + zc, v, s
-            ta += n * m.h
-        x, v, _ = osc.state(self.t_end, t0, C1, C2, F0)
-        self.segs.append((t0, self.t_end, STUCK, C1, C2, F0, zc, 0.0, 0.0, 1.0))
-        return self.t_end, x, v, x + zc, v, 0
+        self.segs.append((t0, te, STUCK, C1, C2, F0, zc, 0.0, 0.0, 1.0))
+        return te, x, v, x + zc, v, s
