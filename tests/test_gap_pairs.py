@@ -52,12 +52,15 @@ def test_pairs_tried_include_forward_selection_and_effects_that_failed_alone():
     # the pool (the three that removed something) among themselves
     assert {("clearance_error", "inclination"), ("clearance_error", "coulomb_friction"),
             ("inclination", "coulomb_friction")} <= items
-    # forward selection: everything on top of the best
-    assert {("clearance_error", f.name) for f in fits[1:]} <= items
+    # forward selection: everything with the best (a restitution per wall first)
+    assert {("clearance_error", f.name) for f in fits[1:4]} <= items
+    assert {(f.name, "clearance_error") for f in fits[4:]} <= items
     # an effect whose fit alone ended far above the nominal gap is paired with the
-    # pool (friction + restitution: the restitution fitted to r lowered by friction)
-    assert ("coulomb_friction", "asymmetric_restitution") in items
-    assert ("inclination", "velocity_dependent_restitution") in items
+    # pool (friction + restitution: the restitution fitted to r lowered by friction);
+    # the restitution per wall goes first, so that the other effect is fitted with the
+    # walls re-fitted at every trial (a joint fit)
+    assert ("asymmetric_restitution", "coulomb_friction") in items
+    assert ("velocity_dependent_restitution", "inclination") in items
     # nested effects are never paired, noise-level ones only with the best
     assert not any({a, b} == {"asymmetric_restitution", "velocity_dependent_restitution"}
                    for a, b in items)
@@ -66,3 +69,20 @@ def test_pairs_tried_include_forward_selection_and_effects_that_failed_alone():
     # a parameter budget (a law per wall checked against no-richer pairs)
     small = {(a.name, b) for a, b in _pair_items(nominal, fits, max_params=3)}
     assert small and all(n not in {"velocity_dependent_restitution"} for p in small for n in p)
+
+
+def test_wall_levels_shift_for_constants_and_linear_laws_within_0_1():
+    from vidiscover.gap.fit import _shift_walls
+
+    fx = Effects.parse(["asymmetric_restitution=0.8,0.4", "coulomb_friction=0.1"])
+    out = _shift_walls(fx, 0.05, -0.1)
+    assert dict(out.active["asymmetric_restitution"]) == pytest.approx(
+        {"r_right": 0.85, "r_left": 0.3})
+    assert out.active["coulomb_friction"] == fx.active["coulomb_friction"]
+    assert _shift_walls(fx, 0.5, -0.5).active["asymmetric_restitution"]["r_left"] == 0.0
+    law = Effects({"velocity_dependent_restitution": {"right": "linear:0.9:0.2",
+                                                      "left": "power:0.3:0.5"}})
+    out = _shift_walls(law, -0.1, 0.2)
+    assert out.active["velocity_dependent_restitution"]["right"] == "linear:0.8:0.2"
+    assert out.active["velocity_dependent_restitution"]["left"] == "power:0.3:0.5"
+    assert _shift_walls(Effects(), 0.1, 0.1) == Effects()

@@ -23,6 +23,7 @@ from .fit import (
     BALL_SPEEDS,
     CANDIDATES,
     PENALTY,
+    PROFILES_WALLS,
     CandidateFit,
     Model,
     _Objective,
@@ -355,6 +356,8 @@ def _parsimonious(fits: list[CandidateFit]) -> list[CandidateFit]:
 PAIR_POOL = 3
 #: Pairs never fitted: nested effects (a law per wall contains constants per wall).
 _NO_PAIR = ({"asymmetric_restitution", "velocity_dependent_restitution"},)
+#: Effects that set the restitution per wall.
+_WALLS = ("asymmetric_restitution", "velocity_dependent_restitution")
 
 
 def _pair_step(item):
@@ -414,6 +417,10 @@ def _pair_items(nominal, fits, max_params=None) -> list[tuple]:
     for a, b in wanted:
         if order[b.name] < order[a.name]:      # the better single effect goes first
             a, b = b, a
+        if b.name in _WALLS and a.name in PROFILES_WALLS:
+            # ... except that a restitution per wall goes first when the other is
+            # fitted with the walls re-fitted at every trial (a joint fit in one step)
+            a, b = b, a
         key = frozenset((a.name, b.name))
         if (len(key) < 2 or key in seen or set(key) in _NO_PAIR
                 or (max_params is not None and a.n_params + b.n_params > max_params)):
@@ -428,7 +435,10 @@ def _best_pair(model, nominal, fits, n_jobs, scheduler, max_params=None):
 
     Every pair's second effect is fitted on top of the first's fit; the
     :data:`PAIR_POOL` best pairs then get the first effect refitted on top of the
-    second's (block-coordinate descent: neither stays frozen). ``max_params``: only
+    second's (block-coordinate descent: neither stays frozen). A restitution per wall
+    paired with a 1-D effect fitted by the gap (:data:`~.fit.PROFILES_WALLS`) is
+    fitted jointly in one step: the walls are re-fitted at every trial of the other
+    effect's parameter, so neither is frozen at its value fitted alone. ``max_params``: only
     pairs with at most this many parameters.
     """
     items = _pair_items(nominal, fits, max_params)
@@ -439,9 +449,14 @@ def _best_pair(model, nominal, fits, n_jobs, scheduler, max_params=None):
     if not done:
         return None, 0
     done.sort(key=lambda x: x[1].score)
-    refits = _map([(model, a, s) for a, s in done[:PAIR_POOL]], n_jobs, scheduler,
-                  worker=_pair_refit)
-    refits += [None] * (len(done) - len(refits))
+    # a second effect fitted with the first's walls re-fitted at every trial was
+    # fitted jointly already: no block-coordinate step for it
+    again = [k for k, (a, s) in enumerate(done[:PAIR_POOL])
+             if not (a.name in _WALLS and s.name in PROFILES_WALLS)]
+    refits = [None] * len(done)
+    for k, r in zip(again, _map([(model, *done[k]) for k in again], n_jobs, scheduler,
+                                worker=_pair_refit)):
+        refits[k] = r
     pairs = [_as_pair(a, s, r) for (a, s), r in zip(done, refits)]
     n = sum(p.n_sims for p in pairs)
     return _parsimonious_pair(pairs), n

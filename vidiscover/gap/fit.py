@@ -239,15 +239,75 @@ def _sets_r(effects: Effects) -> bool:
     return "asymmetric_restitution" in effects or "velocity_dependent_restitution" in effects
 
 
+def _shift_walls(fx: Effects, d_right: float, d_left: float) -> Effects:
+    """``fx`` with the restitution of each wall shifted by ``d_right`` / ``d_left``.
+
+    Constants per wall (``asymmetric_restitution``) are shifted directly; linear laws
+    per wall (``velocity_dependent_restitution``, ``linear:r0:a``) by their ``r0``;
+    other laws are left alone. Values stay within [0, 1].
+    """
+    if "asymmetric_restitution" in fx:
+        p = dict(fx.active["asymmetric_restitution"])
+        p["r_right"] = float(np.clip(p["r_right"] + d_right, 0.0, 1.0))
+        p["r_left"] = float(np.clip(p["r_left"] + d_left, 0.0, 1.0))
+        return fx.with_effect("asymmetric_restitution", **p)
+    if "velocity_dependent_restitution" in fx:
+        p = dict(fx.active["velocity_dependent_restitution"])
+        for side, d in (("right", d_right), ("left", d_left)):
+            parts = str(p[side]).split(":")
+            if parts[0] == "linear" and len(parts) == 3:
+                p[side] = _law_spec(float(parts[1]) + d, float(parts[2]))
+        return fx.with_effect("velocity_dependent_restitution", **p)
+    return fx
+
+
+def _wall_levels(sig: Signature) -> tuple[float, float]:
+    return (sig.values.get("right.r_level", math.nan), sig.values.get("left.r_level", math.nan))
+
+
 class _Objective:
-    """Total gap of a 1-parameter family, re-fitting the nuisance r at each trial."""
+    """Total gap of a 1-parameter family, re-fitting the nuisance restitution at each trial.
+
+    The nuisance is the model's one constant r, or -- when the family's effects set
+    the restitution per wall (an effect paired with ``asymmetric_restitution`` or
+    ``velocity_dependent_restitution``) -- each wall's level: the per-wall values are
+    shifted until the simulated r of each wall matches the recording's (one
+    correction step, the offset carried over between trials). Holding the walls at
+    the values fitted without the other effect would make the pair's fit find the
+    other effect absent: friction or a tilt changes the measured r of each wall, so
+    walls fitted alone are wrong as soon as it is there.
+    """
 
     def __init__(self, model: Model, make_effects, r0: float, tol: float = 0.004) -> None:
         self.model, self.make, self.bias, self.tol = model, make_effects, 0.0, tol
         # no measured r (no impact on which it is defined): the model's own r
         self.r0 = float(r0) if np.isfinite(r0) else float(model.params.r)
         self.n_sims = 0
-        self.cache: dict[float, tuple[float, float]] = {}
+        self.cache: dict[float, tuple[float, float, Effects]] = {}
+        self.offset = (0.0, 0.0)
+
+    def _walls(self, fx: Effects) -> tuple[Signature, Effects]:
+        """Simulate ``fx`` with its per-wall restitution fitted to the recording's."""
+        want = np.array(_wall_levels(self.model.real))
+        fit = np.isfinite(want)
+        fx_try = _shift_walls(fx, *self.offset) if fit.any() else fx
+        sig = simulate_signature(self.model, fx_try, self.r0)
+        self.n_sims += 1
+        if not fit.any():
+            return sig, fx_try
+        got = np.array(_wall_levels(sig))
+        miss = np.where(fit & np.isfinite(got), want - got, 0.0)
+        if np.max(np.abs(miss)) > self.tol:
+            off = (self.offset[0] + miss[0], self.offset[1] + miss[1])
+            fx2 = _shift_walls(fx, *off)
+            sig2 = simulate_signature(self.model, fx2, self.r0)
+            self.n_sims += 1
+            # keep the corrected walls unless they left the recording's attractor
+            if (gap_of(self.model, sig2, fx2).total <= gap_of(self.model, sig, fx_try).total
+                    or not np.all(np.isfinite(_wall_levels(sig)))):
+                self.offset = off
+                return sig2, fx2
+        return sig, fx_try
 
     def __call__(self, theta: float) -> float:
         key = round(float(theta), 12)
@@ -256,7 +316,9 @@ class _Objective:
         fx = self.make(theta)
         real = self.model.real
         r = self.r0
-        if _sets_r(fx) or not np.isfinite(real.r_pooled):
+        if _sets_r(fx):
+            sig, fx = self._walls(fx)
+        elif not np.isfinite(real.r_pooled):
             sig = simulate_signature(self.model, fx, r)
             self.n_sims += 1
         else:
@@ -270,11 +332,15 @@ class _Objective:
             if np.isfinite(sig.r_pooled):
                 self.bias = r - sig.r_pooled
         g = gap_of(self.model, sig, fx).total
-        self.cache[key] = (g, r)
+        self.cache[key] = (g, r, fx)
         return g
 
     def r_at(self, theta: float) -> float:
         return self.cache[round(float(theta), 12)][1]
+
+    def effects_at(self, theta: float) -> Effects:
+        """The effects simulated at ``theta`` (per-wall restitution as re-fitted)."""
+        return self.cache[round(float(theta), 12)][2]
 
 
 def _minimise_1d(f, lo: float, hi: float, n_grid: int = 5, n_golden: int = 4) -> float:
@@ -365,7 +431,8 @@ def _fit_1d(model: Model, base: Effects, name: str, key: str, lo: float, hi: flo
     obj = _Objective(model, lambda th: base.with_effect(name, **{key: transform(th)}),
                      model.real.r_pooled)
     best = _minimise_1d(obj, lo, hi, n_grid=n_grid)
-    return {key: transform(best)}, 1, obj.r_at(best), obj.n_sims
+    return {key: transform(best)}, 1, obj.r_at(best), obj.n_sims, \
+        obj.effects_at(best).without(name)
 
 
 def _fit_friction(model: Model, base: Effects):
@@ -464,7 +531,13 @@ def _fit_resonance(model: Model, base: Effects):
     return {"f_s": float(fl), "zeta_s": zeta}, 2, model.params.r, 1
 
 
-#: Candidate name -> fitter(model, base_effects) -> (params, n_params, r, n_sims) or None.
+#: Candidate name -> fitter(model, base_effects) -> (params, n_params, r, n_sims) or None;
+#: a 1-D fitter adds the base effects as simulated (per-wall restitution re-fitted).
+#: Candidates fitted by a 1-D search of the gap (:class:`_Objective`): the restitution
+#: (the one r, or each wall's level when a paired effect sets them) is re-fitted at
+#: every trial.
+PROFILES_WALLS = ("coulomb_friction", "inclination", "clearance_error")
+
 CANDIDATES = {
     "asymmetric_restitution": _fit_asymmetric,
     "velocity_dependent_restitution": _fit_velocity,
@@ -532,7 +605,9 @@ def fit_candidate(model: Model, name: str, base: Effects | None = None,
     out = CANDIDATES[name](model, base)
     if out is None:
         return None
-    params, n_params, r, n_sims = out
+    params, n_params, r, n_sims = out[:4]
+    if len(out) > 4:                       # the base's walls re-fitted with the effect
+        base = out[4]
     fx = base.with_effect(name, **params)
     sig = validation_signature(model, fx, r)
     gap = compare(model.real, sig, model.rep_var)
@@ -550,9 +625,11 @@ def profile_ci(model: Model, fit: CandidateFit, level_delta: float = 3.84,
     its validity range when the value is ~0; three times that when the gap does not
     rise), the curvature of the gap gives the
     half-width where it rises by ``level_delta`` (3.84: 95 %, one parameter, the
-    effect's other parameters held). When the effects do not set the restitution,
-    the model's one constant r is re-fitted at every step (a profile over that
-    nuisance parameter: friction and tilt trade against r). String parameters
+    effect's other parameters held). The restitution is re-fitted at every step (a
+    profile over that nuisance: friction and tilt trade against r): the model's one
+    constant r, or each wall's level when a paired effect sets them per wall (an
+    interval of friction paired with unequal walls that held the walls fixed came out
+    too narrow). String parameters
     (restitution-law specs) get no interval.
 
     Returns
@@ -564,10 +641,14 @@ def profile_ci(model: Model, fit: CandidateFit, level_delta: float = 3.84,
 
     spec = EFFECTS[fit.name]
     base = fit.effects.without(fit.name)
+    own_walls = fit.name in ("asymmetric_restitution", "velocity_dependent_restitution")
+
     def gap_at(fx: Effects) -> float:
-        if _sets_r(fx) or not np.isfinite(model.real.r_pooled):
+        if own_walls or (not _sets_r(fx) and not np.isfinite(model.real.r_pooled)):
             return gap_of(model, simulate_signature(model, fx, fit.r), fx).total
-        return _Objective(model, lambda _: fx, fit.r)(0.0)    # r profiled out
+        # the nuisance restitution profiled out: the one r, or each wall's level when
+        # the other effect of a pair sets them
+        return _Objective(model, lambda _: fx, fit.r)(0.0)
 
     g0 = gap_at(fit.effects)
     out: dict = {}
