@@ -19,12 +19,14 @@ two-effect cases; true parameters inside the nominal 95 % intervals in >= 80 %;
 ``gap`` on one recording <= 60 s on 2 cores (``--time``); ``gap-check --quick``
 <= 3 min (``--quick``). Each is printed with ``MET`` / ``MISSED``. ``--seed N``
 draws other sensor noise for the same cases: the method was developed on seed 0, so
-quote figures from another seed.
+quote figures from another seed. ``--drawn N --seed S`` runs N cases drawn at random
+instead (:func:`vidiscover.gap.battery.drawn_cases`: clearances, magnitudes and engines
+that the fixed battery does not have), a fresh held-out set for every seed.
 
 Usage::
 
-    python benchmarks/bench_gap.py [--quick | --ci] [--n-jobs 2] [--seed 0] [--time]
-        [--json OUT.json]
+    python benchmarks/bench_gap.py [--quick | --ci | --drawn N] [--n-jobs 2] [--seed 0]
+        [--time] [--json OUT.json]
     python benchmarks/bench_gap.py --calibrate
 """
 
@@ -40,7 +42,7 @@ def main() -> None:
     from vidiscover import Effects, preset
     from vidiscover.commands.gap import human_check
     from vidiscover.gap import diagnose, gap_check
-    from vidiscover.gap.battery import CASES_CI
+    from vidiscover.gap.battery import CASES_CI, drawn_cases
     from vidiscover.workflows import simulate_to_memory
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -50,6 +52,9 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0,
                     help="offset of the recordings' noise seeds (0: the cases the method "
                          "was tuned on; others: fresh draws of the same cases)")
+    ap.add_argument("--drawn", type=int, default=0, metavar="N",
+                    help="instead of the battery, N cases drawn at random from --seed "
+                         "(battery.drawn_cases: a fresh held-out set for each seed)")
     ap.add_argument("--time", action="store_true", help="also time one diagnosis")
     ap.add_argument("--json", default=None, help="write the battery result here")
     ap.add_argument("--calibrate", action="store_true", help="recompute the model-form scales")
@@ -80,8 +85,11 @@ def main() -> None:
               f"{time.process_time() - c0:.1f} s CPU in the parent, {rep.n_sims} simulations, "
               f"verdict {rep.verdict}")
 
+    cases = CASES_CI if args.ci else None
+    if args.drawn:
+        cases = drawn_cases(args.seed, args.drawn)
     res = gap_check(quick=args.quick, seed=args.seed, n_jobs=args.n_jobs, progress=True,
-                    cases=CASES_CI if args.ci else None)
+                    cases=cases)
     print(human_check(res))
     n = res["n_catalogue_cases"]
     print(f"catalogue cases: {n} ({'MET' if n >= 40 else 'MISSED'}: target >= 40 for the "
