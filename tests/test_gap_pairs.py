@@ -86,3 +86,26 @@ def test_wall_levels_shift_for_constants_and_linear_laws_within_0_1():
     assert out.active["velocity_dependent_restitution"]["right"] == "linear:0.8:0.2"
     assert out.active["velocity_dependent_restitution"]["left"] == "power:0.3:0.5"
     assert _shift_walls(Effects(), 0.1, 0.1) == Effects()
+
+
+def test_a_law_per_wall_counts_as_one_only_when_r_varies_over_the_recorded_speeds():
+    import numpy as np
+
+    from vidiscover.gap.diagnose import LAW_SPREAD, _law_spread
+
+    rng = np.random.default_rng(0)
+    speed = np.concatenate([rng.normal(0.5, 0.2, 200), rng.normal(0.4, 0.01, 200)])
+    real = type("Sig", (), {"impacts": {"speed": speed, "side": np.repeat([-1, 1], 200)}})
+
+    def law(left_a, right_a=0.0):
+        return _fit("velocity_dependent_restitution", 1.0,
+                    {"right": f"linear:0.8:{right_a}", "left": f"linear:0.8:{left_a}"}, 4)
+
+    # left: r changes by a x 2 x std(speed) = 0.6 x 0.4 over the left wall's speeds
+    assert _law_spread(law(0.6), real) == pytest.approx(0.6 * 2 * np.std(speed[:200]))
+    assert _law_spread(law(0.6), real) > LAW_SPREAD
+    # slopes of 0.05 change r by 0.02: constants per wall in disguise
+    assert _law_spread(law(0.05), real) < LAW_SPREAD
+    # a steep law on a wall whose impacts all come at one speed changes nothing
+    assert _law_spread(law(0.0, right_a=1.0), real) < LAW_SPREAD
+    assert _law_spread(_fit("asymmetric_restitution", 1.0, {"r_right": 0.8}, 2), real) == 0.0

@@ -502,6 +502,29 @@ def _split_pair(pair: CandidateFit, fits: list) -> list:
     return [first, second]
 
 
+#: Change of r (over +/- one standard deviation of a wall's recorded impact speeds)
+#: above which a fitted law per wall is a real speed dependence (5 times the floor of
+#: a wall's r level).
+LAW_SPREAD = 0.05
+
+
+def _law_spread(fit: CandidateFit, real) -> float:
+    """Largest change of r a fitted law per wall makes over its wall's recorded speeds.
+
+    0 for any other effect, and for laws other than linear ones.
+    """
+    if fit.name != "velocity_dependent_restitution":
+        return 0.0
+    imp = real.impacts
+    out = 0.0
+    for sgn, side in ((1, "right"), (-1, "left")):
+        parts = str(fit.params.get(side, "")).split(":")
+        speed = np.asarray(imp["speed"])[np.asarray(imp["side"]) == sgn]
+        if parts[0] == "linear" and len(parts) == 3 and speed.size >= 2:
+            out = max(out, float(parts[2]) * 2.0 * float(np.std(speed)))
+    return out
+
+
 def _fit_item(item):
     """Top-level worker for :func:`vidiscover.scale.parallel_map`."""
     model, name, base, base_r = item
@@ -572,8 +595,14 @@ def diagnose(rec, *, seed: int = 0, n_jobs: int | None = None, scheduler=None,
                                  max_params=None if left else best.n_params)
             n_sims += n
             removed = best.score - pair.score if pair is not None else -math.inf
+            # a law per wall that explains the gap with a real speed dependence is
+            # replaced by a pair only when the pair does better by one parameter's
+            # penalty; one whose laws are nearly constant is constants per wall in
+            # disguise, and the pairs of constants per wall with another effect
+            # compete with it on their scores
+            margin = PENALTY if _law_spread(best, model.real) >= LAW_SPREAD else 0.0
             if (left and removed > SECOND_EFFECT_SHARE * (best.gap.total - NULL_GAP)
-                    and removed > PENALTY) or (not left and removed > 0):
+                    and removed > PENALTY) or (not left and removed > margin):
                 selected = _split_pair(pair, fits)
     cis = {}
     for c in selected:
