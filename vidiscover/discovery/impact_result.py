@@ -154,7 +154,9 @@ class ImpactLawResult:
     level : float
         Confidence level of ``ci`` and :meth:`band`.
     warning : str or None
-        Why the fit fell back to a constant (or found nothing), else None.
+        Why the fit fell back to a constant (or found nothing), and whether r
+        exceeds 1 over the observed speeds by more than twice the standard error of
+        an r estimate (a passive wall cannot: the estimates are biased), else None.
     boot_coefficients : ndarray, shape (n_boot, len(terms))
         Refitted coefficients per resample.
     effect : float
@@ -162,7 +164,8 @@ class ImpactLawResult:
         percentile); 0 for a constant.
     effect_threshold : float
         Smallest effect a speed dependence needed to be reported:
-        ``max(min_effect, EFFECT_PER_SCATTER * precision)``.
+        ``max(min_effect, EFFECT_PER_SCATTER * precision, EFFECT_PER_SIGMA *
+        s_ends)``; a law in which r rises with speed needs ``RISING_FACTOR`` times it.
     precision : float
         Weighted RMS scatter of the r estimates about the best law.
     note : str or None
