@@ -225,3 +225,23 @@ def test_bad_cli_input_is_one_line_and_exit_2(tmp_path):
     assert len(res.output.strip().splitlines()) == 1 and not out.exists()
     res = CliRunner().invoke(main, ["gap-check", "--seed", "-1"])
     assert res.exit_code == 2 and "--seed" in res.output
+
+
+def test_a_small_gap_is_significant_only_when_one_effect_removes_most_of_it():
+    from vidiscover.effects import Effects
+    from vidiscover.gap.components import GapComponents
+    from vidiscover.gap.diagnose import SIGNIFICANT_GAP, _significant
+    from vidiscover.gap.fit import CandidateFit
+
+    def fit(gap):
+        return CandidateFit(name="x", params={}, n_params=1, r=0.7, effects=Effects(),
+                            gap=GapComponents({"s": float(gap)}, {}), signature=None)
+
+    assert _significant(fit(SIGNIFICANT_GAP + 0.1), [])
+    # the seed-0 battery's 2 deg tilt at 15 mm (6.3 -> 1.2) and the other rig's 3 deg
+    # (4.5 -> 0.1)
+    assert _significant(fit(6.3), [fit(1.2)]) and _significant(fit(4.5), [fit(0.1)])
+    # compliant walls without an effect: 4.9 -> 1.5 (removes 3.4), 2.7 -> 1.1 (40 % left)
+    assert not _significant(fit(4.9), [fit(1.5)])
+    assert not _significant(fit(7.0), [fit(2.5)])
+    assert not _significant(fit(0.5), [fit(0.0)])

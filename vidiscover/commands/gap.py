@@ -104,8 +104,11 @@ def _html(doc: dict, figures: list[str]) -> str:
              _card(f"{100 * doc['unexplained']:.0f} %", "unexplained share")]
     body = [f"<h1>Sim-to-real gap: {esc(doc['recording'])}</h1>",
             f'<div class="cards">{"".join(cards)}</div>',
-            f"<p>Significance threshold {fmt(doc['threshold'], 3)}: the gap is "
-            f"{'significant' if doc['significant'] else 'not significant'}.</p>"]
+            f"<p>Significance threshold {fmt(doc['threshold'], 3)}"
+            + (f" (or one effect removes at least {fmt(doc['threshold_drop'][0], 2)} of the "
+               f"gap and leaves at most {100 * doc['threshold_drop'][1]:.0f} %)"
+               if doc.get("threshold_drop") else "")
+            + f": the gap is {'significant' if doc['significant'] else 'not significant'}.</p>"]
     if doc["attributed"]:
         body.append("<h2>Attributed</h2>")
         body.append(_table(["effect", "share of the gap", "parameters [95 % interval]"],
