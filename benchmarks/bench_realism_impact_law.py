@@ -25,9 +25,16 @@ Figures are quoted on the ``holdout`` split (see :mod:`vidiscover.corpus`);
 ``--split dev`` is for tuning. A case whose simulation or analysis fails is listed,
 not dropped.
 
+``--cache DIR`` keeps each case's pooled impact tables (the input of
+:func:`~vidiscover.discovery.discover_impact_law`, as ``discover`` pools them) and the
+truth it is scored on, so that the impact law can be evaluated again in seconds; the
+law is always fitted by the code under test. Delete the directory when the simulation,
+the sensors or the analysis change.
+
 Usage::
 
     python benchmarks/bench_realism_impact_law.py [--split holdout] [--n 60] [--n-boot 200]
+        [--cache DIR]
 """
 
 from __future__ import annotations
@@ -35,6 +42,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import os
+import pickle
 import platform
 import time
 
@@ -42,7 +50,7 @@ import numpy as np
 
 from vidiscover.analysis import analyze
 from vidiscover.corpus import N_CASES, realism_corpus
-from vidiscover.discovery import discover
+from vidiscover.discovery import discover, discover_impact_law
 
 MIN_IMPACTS = 10
 R_TOL = 0.03
@@ -65,50 +73,87 @@ def _analysis(case, ratio: float, k: int):
     return out, sim.truth
 
 
-def score_constant(case, n_boot: int) -> list[dict]:
-    """The impact law of every Kelvin-Voigt wall of one recording at the case's b."""
+def _truth(impacts) -> dict:
+    return {"side": np.asarray(impacts.side), "v": np.abs(np.asarray(impacts.v_in, float)),
+            "r": np.asarray(impacts.r, float)}
+
+
+def case_tables(case, cache: str | None = None) -> dict:
+    """The pooled impact tables of one case and the truth they are scored on.
+
+    ``kv``: per side, the recording at the case's b alone (Kelvin-Voigt walls);
+    ``hc``: per side, the two recordings with the slower impacts pooled, and
+    ``hc_truth`` the true impacts of the third (Hunt-Crossley walls; see
+    :func:`score_hunt_crossley`). Tables are ``discover(...).impact_data``.
+    """
+    path = os.path.join(cache, f"{case.name}.pkl") if cache else None
+    if path and os.path.exists(path):
+        with open(path, "rb") as fh:
+            return pickle.load(fh)
     kinds = _kinds(case)
-    walls = [s for s in ("right", "left") if kinds.get(s) == "kelvin-voigt"]
-    if not walls:
-        return []
-    out, _ = _analysis(case, 1.0, 0)
-    res = discover([out], mu=case.mu, flight=False, n_boot=n_boot, refine_mu=False)
+    rec = {"name": case.name, "kinds": kinds}
+    if "kelvin-voigt" in kinds.values():
+        out, truth = _analysis(case, 1.0, 0)
+        res = discover([out], mu=case.mu, flight=False, n_boot=0, refine_mu=False)
+        rec["kv"] = dict(res.impact_data)
+        rec["kv_truth"] = _truth(truth.impacts)
+    if "hunt-crossley" in kinds.values():
+        runs = [_analysis(case, ratio, k) for k, ratio in enumerate(RATIOS)]
+        fastest = int(np.argmax([np.max(np.abs(tr.impacts.v_in), initial=0.0)
+                                 for _, tr in runs]))
+        pool = [out for k, (out, _) in enumerate(runs) if k != fastest]
+        res = discover(pool, mu=case.mu, flight=False, n_boot=0, refine_mu=False)
+        rec["hc"] = dict(res.impact_data)
+        rec["hc_truth"] = {**_truth(runs[fastest][1].impacts), "b_pred": RATIOS[fastest]}
+    if path:
+        os.makedirs(cache, exist_ok=True)
+        with open(path + ".tmp", "wb") as fh:
+            pickle.dump(rec, fh)
+        os.replace(path + ".tmp", path)
+    return rec
+
+
+def _law(table, n_boot: int):
+    """The impact law of one wall as ``discover`` fits it (its defaults, seed 0)."""
+    return discover_impact_law(table["v"].to_numpy(), table["r"].to_numpy(),
+                               sigma=table["sigma"].to_numpy(),
+                               groups=table["group"].to_numpy(), seed=0, n_boot=n_boot)
+
+
+def score_constant(case, n_boot: int, tables: dict) -> list[dict]:
+    """The impact law of every Kelvin-Voigt wall of one recording at the case's b."""
     rows = []
-    for side in walls:
-        law = res.impact_laws.get(side)
-        if law is None or law.n < MIN_IMPACTS:
+    for side in ("right", "left"):
+        if tables["kinds"].get(side) != "kelvin-voigt":
+            continue
+        law = _law(tables["kv"][side], n_boot)
+        if law.n < MIN_IMPACTS:
             continue
         rows.append({"name": case.name, "side": side, "n": int(law.n), "kind": law.kind,
                      "formula": law.formula, "constant": law.kind == "constant",
+                     "warning": law.warning,
                      "filter": case.sensors.get("anti_alias", "linear-phase")})
     return rows
 
 
-def score_hunt_crossley(case, n_boot: int) -> list[dict]:
+def score_hunt_crossley(case, n_boot: int, tables: dict) -> list[dict]:
     """Pool two clearances, predict r at the third one's impacts (Hunt-Crossley walls).
 
     The case is recorded at :data:`RATIOS` x b; the recording whose impacts are the
     fastest (largest true ``|v_in|``) is predicted from the other two, so that the
     prediction reaches beyond the pooled speeds where the dynamics allow.
     """
-    kinds = _kinds(case)
-    walls = [s for s in ("right", "left") if kinds.get(s) == "hunt-crossley"]
-    if not walls:
-        return []
-    runs = [_analysis(case, ratio, k) for k, ratio in enumerate(RATIOS)]
-    fastest = int(np.argmax([np.max(np.abs(tr.impacts.v_in), initial=0.0) for _, tr in runs]))
-    pool = [out for k, (out, _) in enumerate(runs) if k != fastest]
-    res = discover(pool, mu=case.mu, flight=False, n_boot=n_boot, refine_mu=False)
-    imp = runs[fastest][1].impacts
-    side_true = np.asarray(imp.side)
     rows = []
-    for side in walls:
-        law = res.impact_laws.get(side)
-        if law is None or law.n < MIN_IMPACTS:
+    for side in ("right", "left"):
+        if tables["kinds"].get(side) != "hunt-crossley":
             continue
+        law = _law(tables["hc"][side], n_boot)
+        if law.n < MIN_IMPACTS:
+            continue
+        truth = tables["hc_truth"]
         v_max = float(law.speed_range[1])
-        sel = side_true == side
-        v, r = np.abs(np.asarray(imp.v_in, float)[sel]), np.asarray(imp.r, float)[sel]
+        sel = truth["side"] == side
+        v, r = truth["v"][sel], truth["r"][sel]
         keep = v <= BEYOND * v_max
         if not keep.any():
             continue
@@ -116,7 +161,7 @@ def score_hunt_crossley(case, n_boot: int) -> list[dict]:
         rms = float(np.sqrt(np.mean(err ** 2)))
         rows.append({"name": case.name, "side": side, "n": int(law.n), "kind": law.kind,
                      "formula": law.formula, "n_pred": int(keep.sum()),
-                     "b_pred": RATIOS[fastest], "beyond": float(v[keep].max() / v_max),
+                     "b_pred": truth["b_pred"], "beyond": float(v[keep].max() / v_max),
                      "rms": rms, "ok": bool(rms <= R_TOL)})
     return rows
 
@@ -128,6 +173,9 @@ def main() -> None:
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--n-boot", type=int, default=200,
                     help="bootstrap resamples of discover (its default: 200)")
+    ap.add_argument("--cache", default=None,
+                    help="directory keeping each case's pooled impact tables (re-scoring "
+                         "takes seconds; delete it when the simulation or analysis change)")
     args = ap.parse_args()
     cases = realism_corpus(args.split, min(args.start + args.n, N_CASES[args.split]))
     cases = cases[args.start:]
@@ -137,8 +185,9 @@ def main() -> None:
     for case in cases:
         t0 = time.perf_counter()
         try:
-            c_rows = score_constant(case, args.n_boot)
-            h_rows = score_hunt_crossley(case, args.n_boot)
+            tables = case_tables(case, args.cache)
+            c_rows = score_constant(case, args.n_boot, tables)
+            h_rows = score_hunt_crossley(case, args.n_boot, tables)
         except Exception as err:  # noqa: BLE001 - a failing case is a result too
             print(f"  {case.name}: FAILED {type(err).__name__}: {err}", flush=True)
             failed.append(case.name)
@@ -147,7 +196,8 @@ def main() -> None:
         hc += h_rows
         for r in c_rows:
             print(f"  {r['name']} {r['side']:<5} KV  n {r['n']:4d} {r['filter']:<12} "
-                  f"{'constant' if r['constant'] else 'FALSE ' + r['formula']}", flush=True)
+                  f"{'constant' if r['constant'] else 'FALSE ' + r['formula']}"
+                  f"{'  [' + r['warning'] + ']' if r['warning'] else ''}", flush=True)
         for r in h_rows:
             print(f"  {r['name']} {r['side']:<5} HC  n {r['n']:4d} {r['formula']:<40} "
                   f"b x {r['b_pred']:.2f}: {r['n_pred']} impacts up to {r['beyond']:.2f} x v_max: "
