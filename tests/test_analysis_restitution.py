@@ -136,3 +136,25 @@ def test_mu_table_function_matches_the_method():
     a = mu_table(out.detection, rec, [0.0, 0.1])
     b = out.mu_table([0.0, 0.1])
     assert np.allclose(a["right_rms"], b["right_rms"])
+
+
+@pytest.mark.parametrize("mu", [0.0, 0.2])
+def test_friction_table_reuses_the_lo_motion_and_equals_a_full_reconstruction(mu):
+    """refly (the table's path) solves the ball's flights only; the LO motion is shared."""
+    from vidiscover.analysis import reconstruct
+    from vidiscover.analysis.reconstruction import refly
+
+    fx = ASYM + ("coulomb_friction=0.3",)
+    out, _ = analysed(0.009, fx, 1, mu=0.3)
+    full = reconstruct(out.detection, out._recording, b=out.b, mu=mu)
+    fast = refly(out.reconstruction, out.detection, mu)
+    assert fast.x is out.reconstruction.x and fast.v is out.reconstruction.v
+    assert fast.n_flights == full.n_flights >= 60
+    for cols in ("impact_columns", "flight_columns"):
+        for k, want in getattr(full, cols).items():
+            got = getattr(fast, cols)[k]
+            if want.dtype.kind == "f":
+                # measured: <= 2.2e-16 (one subtraction's rounding in the LO velocity)
+                np.testing.assert_allclose(got, want, rtol=0, atol=1e-12, err_msg=k)
+            else:
+                np.testing.assert_array_equal(got, want, err_msg=k)

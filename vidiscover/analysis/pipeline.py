@@ -157,7 +157,8 @@ class AnalysisResult:
         """Paper Table 2 for this recording (see :func:`restitution.mu_table`)."""
         if self._recording is None:
             raise InputError("mu_table needs the recording; analyse it again with analyze()")
-        return mu_table(self.detection, self._recording, mus, b=self.b)
+        return mu_table(self.detection, self._recording, mus, b=self.b,
+                        recon=self.reconstruction)
 
 
 def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 5.5,

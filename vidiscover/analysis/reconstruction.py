@@ -300,30 +300,18 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
     def lo_acc(tq):
         return np.interp(tq - t[0], tr, det.baseline)
 
+    def lo_x(tq):
+        return np.interp(tq - t[0], tr, x_f)
+
     flights, traj = _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f,
-                             det.baseline, fs, stick_tol, lo_velocity, lo_acc)
-    del lo_velocity, lo_acc
+                             det.baseline, fs, stick_tol, lo_x, lo_acc, lo_velocity)
+    del lo_velocity, lo_acc, lo_x
+    tr = None                        # (dropped before the laser derivative)
     VD = None                        # (dropped before the next full-length array)
     xl_f = fill_gaps(xl, ~okx) if not okx.all() else xl
     v_disp = _gradient(xl_f, dt)
     del xl_f
-    m = t_imp.size
-    w_minus = np.full(m, np.nan)
-    w_plus = np.full(m, np.nan)
-    f_in = np.full(m, -1, dtype=np.int64)
-    f_out = np.full(m, -1, dtype=np.int64)
-    nf = flights["t_start"].size
-    if nf:
-        i_s, i_e = flights["i_start"], flights["i_end"]
-        w_plus[i_s] = flights["w_start"]
-        w_minus[i_e] = flights["w_end"]
-        f_out[i_s] = np.arange(nf)
-        f_in[i_e] = np.arange(nf)
-    impacts = {
-        "t": t_imp, "side": det.side, "x": x_imp, "y": y_imp, "v_minus": v_minus,
-        "v_plus": v_plus, "dv": dv, "w_minus": w_minus, "w_plus": w_plus,
-        "u_minus": w_minus - v_minus, "u_plus": w_plus - v_plus,
-        "flight_in": f_in, "flight_out": f_out}
+    impacts = _impact_columns(t_imp, det.side, x_imp, y_imp, v_minus, v_plus, dv, flights)
     return Reconstruction(t=t, x=x_f, v=v_f, v_disp=v_disp, impact_columns=impacts,
                           flight_columns=flights, b=b, mu=float(mu),
                           position_noise=float(position_noise), _traj=traj)
@@ -424,8 +412,124 @@ def _quadratic_smoother(y, win, h):
     return val, der
 
 
+def refly(recon: Reconstruction, det: ImpactDetection, mu: float, *,
+          stick_tol: float | None = None) -> Reconstruction:
+    """The ball's flights solved again under friction ``mu``, on the same LO motion.
+
+    The LO motion (displacement, velocity, the states at the impacts) does not depend
+    on the friction assumed for the ball, so the friction table (paper Table 2) needs
+    it once: this reuses ``recon``'s arrays (no full-length array is made) and equals
+    ``reconstruct(det, rec, recon.b, mu)`` up to the rounding of one subtraction in the
+    LO velocity between samples (~1e-16 m/s).
+
+    Parameters
+    ----------
+    recon : Reconstruction
+        A reconstruction of ``det`` (any ``mu``).
+    det : ImpactDetection
+        The detection it was made from.
+    mu : float
+        Friction coefficient assumed between ball and LO.
+    stick_tol : float, optional
+        As in :func:`reconstruct`.
+
+    Returns
+    -------
+    Reconstruction
+    """
+    if not (math.isfinite(mu) and 0 <= mu <= 2):
+        raise InputError(f"mu must be in [0, 2] (friction coefficient), was {mu!r}")
+    b = recon.b
+    stick_tol = max(2e-5, 0.01 * b) if stick_tol is None else float(stick_tol)
+    t, v = recon.t, recon.v
+    fs = det.sample_rate
+    tr0, n = t[0], t.size
+    ti = det.t - tr0
+    dv = det.dv
+    cdv = np.concatenate([[0.0], np.cumsum(dv)])
+    # the sample from which each jump counts in v (as in reconstruct)
+    first = np.minimum(np.floor(ti * fs).astype(np.int64) + 1, n)
+    first += (first < n) & (first > 0) & ((t[np.clip(first - 1, 0, n - 1)] - tr0) > ti)
+
+    def lo_velocity(tq):
+        # v less the jumps counted in it, interpolated between the two samples about
+        # tq, plus the jumps strictly before tq
+        tq = np.asarray(tq, dtype=float)
+        tc = np.clip(tq, t[0], t[-1])
+        j = np.clip(np.searchsorted(t, tc, side="right") - 1, 0, n - 2)
+        v0 = v[j] - cdv[np.searchsorted(first, j, side="right")]
+        v1 = v[j + 1] - cdv[np.searchsorted(first, j + 1, side="right")]
+        slope = (v1 - v0) / (t[j + 1] - t[j])
+        return slope * (tc - t[j]) + v0 + cdv[np.searchsorted(ti, tq - tr0)]
+
+    def lo_acc(tq):
+        return np.interp(tq, t, det.baseline)
+
+    def lo_x(tq):
+        return np.interp(tq, t, recon.x)
+
+    ic = recon.impact_columns
+    side = det.sign.astype(float)
+    flights, traj = _flights(det.t, side, ic["x"], ic["y"], ic["v_minus"], ic["v_plus"], b,
+                             float(mu), t, recon.x, det.baseline, fs, stick_tol, lo_x,
+                             lo_acc, lo_velocity)
+    impacts = _impact_columns(det.t, det.side, ic["x"], ic["y"], ic["v_minus"],
+                              ic["v_plus"], dv, flights)
+    return Reconstruction(t=t, x=recon.x, v=v, v_disp=recon.v_disp, impact_columns=impacts,
+                          flight_columns=flights, b=b, mu=float(mu),
+                          position_noise=recon.position_noise, _traj=traj)
+
+
+def _impact_columns(t_imp, side_names, x_imp, y_imp, v_minus, v_plus, dv, flights) -> dict:
+    """Per-impact states, the ball's velocities taken from the flights about each."""
+    m = t_imp.size
+    w_minus = np.full(m, np.nan)
+    w_plus = np.full(m, np.nan)
+    f_in = np.full(m, -1, dtype=np.int64)
+    f_out = np.full(m, -1, dtype=np.int64)
+    nf = flights["t_start"].size
+    if nf:
+        i_s, i_e = flights["i_start"], flights["i_end"]
+        w_plus[i_s] = flights["w_start"]
+        w_minus[i_e] = flights["w_end"]
+        f_out[i_s] = np.arange(nf)
+        f_in[i_e] = np.arange(nf)
+    return {
+        "t": t_imp, "side": side_names, "x": x_imp, "y": y_imp, "v_minus": v_minus,
+        "v_plus": v_plus, "dv": dv, "w_minus": w_minus, "w_plus": w_plus,
+        "u_minus": w_minus - v_minus, "u_plus": w_plus - v_plus,
+        "flight_in": f_in, "flight_out": f_out}
+
+
+def _first_where(cond, starts: np.ndarray, ends: np.ndarray, part: int = _PART) -> np.ndarray:
+    """Per interval ``[start, end]`` of sample indices, the first index where ``cond`` holds.
+
+    -1 where it holds nowhere in the interval. ``cond(lo, hi)`` gives the condition on
+    the samples ``lo:hi``; it is asked ``part`` samples at a time over the span of the
+    intervals, never for the whole record.
+    """
+    found = np.full(starts.size, -1, dtype=np.int64)
+    if starts.size == 0:
+        return found
+    pending = np.ones(starts.size, dtype=bool)
+    for lo in range(int(starts.min()), int(ends.max()) + 1, part):
+        hi = lo + part
+        act = np.flatnonzero(pending & (starts < hi) & (ends >= lo))
+        if act.size == 0:
+            continue
+        idx = np.flatnonzero(cond(lo, hi)) + lo
+        k = np.full(act.size, np.iinfo(np.int64).max)
+        if idx.size:
+            j = np.searchsorted(idx, np.maximum(starts[act], lo))
+            k = np.where(j < idx.size, idx[np.minimum(j, idx.size - 1)], k)
+        hit = k <= ends[act]
+        found[act[hit]] = k[hit]
+        pending[act[hit | (ends[act] < hi)]] = False
+    return found
+
+
 def _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f, acc, fs,
-             stick_tol, lo_velocity, lo_acc):
+             stick_tol, lo_x, lo_acc, lo_velocity):
     """Flight table between consecutive impacts (see the module docs)."""
     m = t_imp.size
     nf = max(m - 1, 0)
@@ -446,7 +550,6 @@ def _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f, acc, fs,
     mug = mu * G_ACCEL
 
     # ---- stick-then-fly candidates: opposite walls, start wall holds the ball at t_s+
-    t0 = t[0]
     cs = np.clip(np.searchsorted(t, ts, side="right"), 0, t.size - 1)
     ce = np.clip(np.searchsorted(t, te, side="left") - 1, 0, t.size - 1)
     a_start = acc[cs]
@@ -456,18 +559,17 @@ def _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f, acc, fs,
     found = np.zeros(nf, dtype=bool)
     if cand.any():
         # first sample after t_s where the wall lets go: left x'' < -mu g, right x'' > mu g
-        rel_left = np.flatnonzero(acc < -mug)
-        rel_right = np.flatnonzero(acc > mug)
-        for sgn, rel in ((-1.0, rel_left), (1.0, rel_right)):
+        # (searched part by part: at mu = 0 the samples that let go are half the record)
+        for sgn in (-1.0, 1.0):
             sel = np.flatnonzero(cand & (ss == sgn))
-            if sel.size == 0 or rel.size == 0:
+            if sel.size == 0:
                 continue
-            j = np.searchsorted(rel, cs[sel])
-            okj = j < rel.size
-            kk = np.where(okj, rel[np.minimum(j, rel.size - 1)], t.size)
-            inside = okj & (kk <= ce[sel]) & (kk > 0)
-            kk = np.clip(kk, 1, t.size - 1)
             thr = -mug if sgn < 0 else mug
+            lets_go = ((lambda lo, hi, thr=thr: acc[lo:hi] < thr) if sgn < 0 else
+                       (lambda lo, hi, thr=thr: acc[lo:hi] > thr))
+            first_go = _first_where(lets_go, cs[sel], ce[sel])
+            inside = first_go > 0
+            kk = np.clip(np.where(first_go >= 0, first_go, t.size), 1, t.size - 1)
             a0, a1 = acc[kk - 1], acc[kk]
             with np.errstate(divide="ignore", invalid="ignore"):
                 fr = np.clip(np.where(a1 != a0, (thr - a0) / (a1 - a0), 0.0), 0.0, 1.0)
@@ -475,9 +577,8 @@ def _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f, acc, fs,
             trel = np.maximum(trel, ts[sel])
             t_rel[sel] = np.where(inside, trel, ts[sel])
             found[sel] = inside
-        del rel_left, rel_right, rel
     cand &= found
-    x_rel = np.interp(t_rel - t0, t - t0, x_f)
+    x_rel = lo_x(t_rel)
     v_rel = lo_velocity(t_rel)
     y_rel = x_rel + ss * b
 

@@ -30,8 +30,9 @@ and after the jump,
 Fig. 16), standard deviation and a percentile-bootstrap confidence interval of
 the RMS (seeded).
 
-**Friction sensitivity** (:func:`mu_table`, paper Table 2): the whole
-reconstruction is redone for each assumed mu. Friction makes the ball slower at
+**Friction sensitivity** (:func:`mu_table`, paper Table 2): the ball's flights
+are solved again for each assumed mu (the LO motion does not depend on it, and is
+reconstructed once). Friction makes the ball slower at
 arrival and faster at departure than its mean velocity, so the physically
 consistent correction *raises* r with mu (paper Table 2 reports a slow decrease;
 the sign convention of its eq. 8 cannot be reproduced with a friction force that
@@ -56,7 +57,7 @@ from ..errors import InputError
 from ..params import G_ACCEL
 from ._table import check_columns, to_frame
 from .impacts import ImpactDetection
-from .reconstruction import Reconstruction, reconstruct
+from .reconstruction import Reconstruction, reconstruct, refly
 
 __all__ = ["WallStats", "RestitutionEstimate", "estimate_restitution", "mu_table",
            "RESTITUTION_COLUMNS", "MU_TABLE", "VELOCITY_FLOOR", "SIDES", "R_MAX"]
@@ -262,7 +263,8 @@ def _quantile_sorted(s: np.ndarray, q: float) -> float:
 
 
 def mu_table(det: ImpactDetection, rec, mus=MU_TABLE, *, b: float | None = None,
-             slow_ratio: float = 0.25, **restitution_kw) -> pd.DataFrame:
+             slow_ratio: float = 0.25, recon: Reconstruction | None = None,
+             **restitution_kw) -> pd.DataFrame:
     """Per-wall RMS restitution for several assumed friction coefficients (Table 2).
 
     Parameters
@@ -277,6 +279,10 @@ def mu_table(det: ImpactDetection, rec, mus=MU_TABLE, *, b: float | None = None,
         Half-clearance (m), default from the metadata.
     slow_ratio : float
         Friction-ratio limit of the ``warn`` columns (see the module docs).
+    recon : Reconstruction, optional
+        A reconstruction of ``det`` at this ``b`` (any mu) whose LO motion is reused:
+        only the ball's flights depend on mu (:func:`~.reconstruction.refly`). Default:
+        reconstructed here once.
     **restitution_kw
         Passed to :func:`estimate_restitution` (``n_boot`` defaults to 0 here).
 
@@ -287,12 +293,17 @@ def mu_table(det: ImpactDetection, rec, mus=MU_TABLE, *, b: float | None = None,
         ``{side}_ratio`` (median friction ratio), ``{side}_warn``.
     """
     restitution_kw.setdefault("n_boot", 0)
+    b = float(rec.meta.b if b is None else b)
+    if recon is None:
+        recon = reconstruct(det, rec, b=b)
+    elif recon.b != b:
+        raise InputError(f"mu_table: the reconstruction given is at b = {recon.b!r} m, the "
+                         f"table is asked at b = {b!r} m; pass recon=None to reconstruct")
     rows = []
     for mu in mus:
         mu = float(mu)
-        recon = reconstruct(det, rec, b=b, mu=mu)
-        est = estimate_restitution(recon, det, slow_ratio=slow_ratio, **restitution_kw)
-        del recon                       # before the next one: full-length arrays are large
+        est = estimate_restitution(refly(recon, det, mu), det, slow_ratio=slow_ratio,
+                                   **restitution_kw)
         row = {"mu": mu}
         for side in SIDES:
             w = est.wall(side)

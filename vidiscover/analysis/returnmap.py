@@ -177,6 +177,20 @@ class FeatureContext:
         """Impacts per complete cycle."""
         return self._counts
 
+    def finite_motion(self) -> tuple[np.ndarray, np.ndarray]:
+        """(ts, x) at the samples where x is finite.
+
+        ``ts`` and ``x`` themselves (no copy of a long record) when every sample is.
+        """
+        return self._finite_motion
+
+    @functools.cached_property
+    def _finite_motion(self) -> tuple[np.ndarray, np.ndarray]:
+        ok = np.isfinite(self.x)
+        if ok.all():
+            return self.ts, self.x
+        return self.ts[ok], self.x[ok]
+
     @functools.cached_property
     def _cycles(self) -> np.ndarray:
         c = self.forcing.cycle_starts(self.t_start, self.t_end)
@@ -332,9 +346,17 @@ def _cycle_amplitudes(ctx: FeatureContext) -> np.ndarray:
     c = ctx.cycles()
     if c.size < 2 or ctx.x.size == 0:
         return np.zeros(0)
-    ok = np.isfinite(ctx.x)
+    ts, xf = ctx.finite_motion()
     idx = np.searchsorted(ctx.ts, c)
     lo, hi = idx[:-1], idx[1:]
+    if xf is ctx.x:                                 # every sample finite: no copies
+        keep = hi > lo
+        if not keep.any():
+            return np.zeros(0)
+        lo = lo[keep]
+        end = int(hi[keep][-1])
+        return 0.5 * (np.maximum.reduceat(xf[:end], lo) - np.minimum.reduceat(xf[:end], lo))
+    ok = np.isfinite(ctx.x)
     cnt = np.concatenate([[0], np.cumsum(ok)])
     keep = (hi > lo) & (cnt[hi] > cnt[lo])          # cycles with a finite sample
     if not keep.any():
@@ -366,12 +388,12 @@ def _strobe(ctx: FeatureContext) -> float:
     relative to max |x|.
     """
     c = ctx.cycles()
-    ok = np.isfinite(ctx.x)
-    if c.size < 6 or not ok.any():
+    ts, xf = ctx.finite_motion()
+    if c.size < 6 or xf.size == 0:
         return _NAN
-    xs = np.interp(c, ctx.ts[ok], ctx.x[ok])
+    xs = np.interp(c, ts, xf)
     xs = xs[xs.size // 2:]
-    amp = np.abs(ctx.x[ok]).max()
+    amp = max(float(xf.max()), -float(xf.min()))
     best = _NAN
     for p in range(1, 5):
         if xs.size <= p:

@@ -191,16 +191,17 @@ def cycle_waveforms(ctx: FeatureContext, points: int = _WAVE_POINTS) -> np.ndarr
         Empty when there is no complete cycle or no finite displacement.
     """
     c = ctx.cycles()
-    ok = np.isfinite(ctx.x)
-    if c.size < 2 or ok.sum() < 2:
+    ts, xf = ctx.finite_motion()
+    if c.size < 2 or xf.size < 2:
         return np.zeros((0, points))
     grid = c[:-1, None] + np.diff(c)[:, None] * (np.arange(points) / points)[None, :]
-    return np.interp(grid.ravel(), ctx.ts[ok], ctx.x[ok]).reshape(grid.shape)
+    return np.interp(grid.ravel(), ts, xf).reshape(grid.shape)
 
 
 def _amp(ctx: FeatureContext) -> float:
-    ok = np.isfinite(ctx.x)
-    return float(np.abs(ctx.x[ok]).max()) if ok.any() else _NAN
+    """The largest |x| over the finite samples (without copying a long record)."""
+    _, xf = ctx.finite_motion()
+    return max(float(xf.max()), -float(xf.min())) if xf.size else _NAN
 
 
 def _waveform_errors(ctx: FeatureContext) -> list[float]:
