@@ -96,3 +96,22 @@ def test_reduced_battery_scores_as_measured():
     for key in (("velocity_dependent_restitution", 0.015), ("coulomb_friction", 0.009),
                 ("excitation_distortion", 0.009)):
         assert rows[key]["predicted"] == key[0]
+
+
+def test_drawn_cases_are_a_pure_function_of_the_seed_and_cover_every_kind():
+    from vidiscover.effects import Effects
+    from vidiscover.gap.battery import drawn_cases
+
+    a, b = drawn_cases(3, 24), drawn_cases(3, 24)
+    assert a == b and drawn_cases(4, 24) != a
+    assert {c.effect for c in a} == set(EFFECTS) | {
+        "none", "asymmetric_restitution+coulomb_friction", "asymmetric_restitution+inclination"}
+    for c in a:
+        Effects.parse(list(c.spec))                       # every spec is valid
+        assert 0.006 <= c.b <= 0.015
+        assert c.kind == ("none" if c.effect == "none" else "catalogue")
+        if c.contact and "asymmetric_restitution" in c.effect:
+            # unequal compliant walls make the restitution effect; no spec for it
+            assert not any(s.startswith("asymmetric_restitution") for s in c.spec)
+            assert len(c.contact) == 2
+    assert len({c.seed for c in a}) == len(a)
