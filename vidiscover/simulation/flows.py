@@ -47,13 +47,18 @@ class BaseMotion:
         """B_j such that xe = Im(sum B_j exp(i w_j t))."""
         return np.array([self.amplitude * h * np.exp(1j * ph) for _, h, ph in self.harmonics])
 
-    def displacement(self, t):
-        """xe(t) (m)."""
+    def displacement(self, t, trig=None):
+        """xe(t) (m); ``trig``: the (sin w_j t, cos w_j t) pairs if already evaluated."""
         t = np.asarray(t, dtype=float)
         out = np.zeros_like(t)
-        for w, bj in zip(self.omegas, self.complex_amplitudes):
-            out += bj.real * np.sin(w * t) + bj.imag * np.cos(w * t)
+        for j, (w, bj) in enumerate(zip(self.omegas, self.complex_amplitudes)):
+            sn, cs = trig[j] if trig is not None else (np.sin(w * t), np.cos(w * t))
+            out += bj.real * sn + bj.imag * cs
         return out
+
+    def trig(self, t: np.ndarray) -> list[tuple[np.ndarray, np.ndarray]]:
+        """(sin w_j t, cos w_j t) of every harmonic: shared by the LO's and the base's flows."""
+        return [(np.sin(w * t), np.cos(w * t)) for w in self.omegas]
 
 
 class Oscillator:
@@ -92,13 +97,18 @@ class Oscillator:
             a -= w * w * (pa * s + pb * c)
         return x, v, a
 
-    def particular_array(self, t: np.ndarray, F0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """Vectorised (x_p, x_p', x_p''); ``F0`` may be an array matching ``t``."""
+    def particular_array(self, t: np.ndarray, F0, trig=None
+                         ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """Vectorised (x_p, x_p', x_p''); ``F0`` may be an array matching ``t``.
+
+        ``trig``: the (sin w_j t, cos w_j t) pairs if already evaluated
+        (:meth:`BaseMotion.trig`).
+        """
         x = np.asarray(F0, dtype=float) / self.k + np.zeros_like(t)
         v = np.zeros_like(t)
         a = np.zeros_like(t)
-        for w, pa, pb in self._terms:
-            s, c = np.sin(w * t), np.cos(w * t)
+        for j, (w, pa, pb) in enumerate(self._terms):
+            s, c = trig[j] if trig is not None else (np.sin(w * t), np.cos(w * t))
             x += pa * s + pb * c
             v += w * (pa * c - pb * s)
             a -= w * w * (pa * s + pb * c)
@@ -124,10 +134,10 @@ class Oscillator:
         ah = -2.0 * sg * vh - (self.k / self.m) * xh
         return xp + xh, vp + vh, ap + ah
 
-    def state_array(self, t: np.ndarray, t0, C1, C2, F0
+    def state_array(self, t: np.ndarray, t0, C1, C2, F0, trig=None
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Vectorised (x, x', x''); segment values may be arrays matching ``t``."""
-        xp, vp, ap = self.particular_array(t, F0)
+        xp, vp, ap = self.particular_array(t, F0, trig)
         tau = t - t0
         e = np.exp(-self.sigma * tau)
         cs, sn = np.cos(self.wd * tau), np.sin(self.wd * tau)

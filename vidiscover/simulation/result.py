@@ -235,23 +235,29 @@ class SimulationResult:
         idx = np.clip(np.searchsorted(seg["t0"], t, side="right") - 1, 0, seg["t0"].size - 1)
         out = {k: np.empty_like(t) for k in ("x", "xd", "xdd", "y", "yd")}
         model = self._model
+        trig = model.base.trig(t)          # the LO's and the base's harmonics, once
+        modes = seg["mode"][idx]
         for mode, osc in ((0, model.free), (1, model.stuck)):
-            sel = seg["mode"][idx] == mode
+            sel = modes == mode
             if not sel.any():
                 continue
-            i = idx[sel]
-            ts = t[sel]
-            x, v, a = osc.state_array(ts, seg["t0"][i], seg["C1"][i], seg["C2"][i], seg["F0"][i])
+            if sel.all():                  # one mode throughout: no masked copies
+                sel, i, ts, tg = slice(None), idx, t, trig
+            else:
+                i, ts = idx[sel], t[sel]
+                tg = [(sn[sel], cs[sel]) for sn, cs in trig]
+            t0 = seg["t0"][i]
+            x, v, a = osc.state_array(ts, t0, seg["C1"][i], seg["C2"][i], seg["F0"][i], tg)
             out["x"][sel], out["xd"][sel], out["xdd"][sel] = x, v, a
             if mode == 0:
-                tau = ts - seg["t0"][i]
+                tau = ts - t0
                 out["y"][sel] = seg["y0"][i] + seg["w0"][i] * tau + 0.5 * seg["ab"][i] * tau ** 2
                 out["yd"][sel] = seg["w0"][i] + seg["ab"][i] * tau
             else:
                 out["y"][sel] = x + seg["y0"][i]
                 out["yd"][sel] = v
         out["z"] = out["y"] - out["x"]
-        out["xe"] = model.base.displacement(t)
+        out["xe"] = model.base.displacement(t, trig)
         return out
 
     def record_impacts(self) -> ImpactTable:
