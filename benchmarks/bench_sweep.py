@@ -6,21 +6,30 @@ within 1.25x of joblib on the same cores. Runs the same sweep
 
 - serial (``n_jobs=1``, one process, no pool),
 - joblib, 2 loky worker processes (the default backend),
-- Dask ``distributed.LocalCluster`` on loopback, 2 worker processes x 1 thread,
+- Dask on loopback: a ``dask scheduler`` and 2 ``dask worker`` processes x 1 thread
+  started from the command line as a user would (``--local-cluster``: a
+  ``distributed.LocalCluster`` of 2 worker processes instead),
 
 prints the wall-clock of each (pool/cluster start included and shown apart), checks
 that the three tables are identical, and times the stages of one point (simulate,
 sensor record, ground-truth label, analyse) on a sample to show where the time goes.
 The machine's load average is printed too: on a shared machine it matters.
 
-Usage: ``python benchmarks/bench_sweep.py [--n 1000] [--skip-serial] [--skip-dask]``
+Usage: ``python benchmarks/bench_sweep.py [--n 1000] [--skip-serial] [--skip-dask]
+[--local-cluster]``
 """
 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import platform
+import shutil
+import socket
+import subprocess
+import sys
+import tempfile
 import time
 
 import numpy as np
@@ -58,6 +67,44 @@ def _stage_times(values, settle, duration, sample):
     return {k: float(np.mean(v)) for k, v in stages.items()}
 
 
+@contextlib.contextmanager
+def command_line_cluster(workers: int):
+    """A ``dask scheduler`` and ``workers`` single-thread ``dask worker`` processes on
+    loopback, started from the command line; yields the scheduler address."""
+    import distributed
+
+    exe = shutil.which("dask", path=os.path.dirname(sys.executable)) or shutil.which("dask")
+    if exe is None:
+        raise SystemExit("the dask command line is not installed (pip install -e '.[dask]')")
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    env = {**os.environ, "PYTHONWARNINGS": "ignore"}
+    with tempfile.TemporaryDirectory() as log:
+        procs = [subprocess.Popen([exe, "scheduler", "--host", "127.0.0.1", "--port",
+                                   str(port), "--dashboard-address", ":0", "--no-show"],
+                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                  env=env)]
+        try:
+            for k in range(workers):
+                procs.append(subprocess.Popen(
+                    [exe, "worker", address, "--nthreads", "1", "--nworkers", "1",
+                     "--no-dashboard", "--local-directory", os.path.join(log, f"w{k}")],
+                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env))
+            with distributed.Client(address, timeout="60s") as c:
+                c.wait_for_workers(workers, timeout=120)
+            yield address
+        finally:
+            for p in procs[::-1]:
+                p.terminate()
+            for p in procs:
+                try:
+                    p.wait(timeout=20)
+                except subprocess.TimeoutExpired:
+                    p.kill()
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
@@ -68,6 +115,9 @@ def main() -> None:
     ap.add_argument("--sample", type=int, default=40, help="points timed stage by stage")
     ap.add_argument("--skip-serial", action="store_true")
     ap.add_argument("--skip-dask", action="store_true")
+    ap.add_argument("--local-cluster", action="store_true",
+                    help="Dask on a distributed.LocalCluster instead of command-line "
+                         "scheduler and worker processes")
     ap.add_argument("--no-classify", action="store_true",
                     help="skip the regime classifier (issue 5 times simulate + analyze + "
                          "classify)")
@@ -115,14 +165,20 @@ def main() -> None:
         import distributed
 
         t = time.perf_counter()
-        with distributed.LocalCluster(n_workers=args.workers, threads_per_worker=1,
-                                      processes=True, host="127.0.0.1",
-                                      dashboard_address=None) as lc, \
-                distributed.Client(lc) as client:
+        if args.local_cluster:
+            cluster = distributed.LocalCluster(n_workers=args.workers, threads_per_worker=1,
+                                               processes=True, host="127.0.0.1",
+                                               dashboard_address=None)
+        else:
+            cluster = command_line_cluster(args.workers)
+        with cluster as where, distributed.Client(where) as client:
             start = time.perf_counter() - t
             t = time.perf_counter()
             results["dask"] = sweep("b", values, scheduler=client, **kw)
             times["dask"] = (time.perf_counter() - t, start)
+        print("dask: " + ("LocalCluster, " if args.local_cluster else
+                          "command-line 'dask scheduler' + 'dask worker' processes, ")
+              + f"{args.workers} workers x 1 thread on loopback")
 
     print(f"{'backend':<8} {'wall (s)':>9} {'start (s)':>10} {'per point':>10} "
           f"{'vs target':>10}")
