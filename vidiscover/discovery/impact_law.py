@@ -56,9 +56,9 @@ ways: ``r = sum_k c_k f_k(v)`` (free intercept) and ``1 - r = sum_k c_k f_k(v)``
    then does not turn ``1 - a v^p`` into ``1.002 - a v^p``. The defaults are
    calibrated on constant-r data of both engines (see :data:`MIN_EFFECT`,
    :data:`EFFECT_PER_SIGMA` and :data:`RISING_FACTOR`). A law whose r exceeds 1 over
-   the observed speeds by more than twice the standard error of an r estimate
-   carries a :attr:`ImpactLawResult.warning`: a passive wall cannot do that, the r
-   estimates are biased.
+   the observed speeds carries a :attr:`ImpactLawResult.warning` (a passive wall
+   cannot do that), which says whether it does so by more than twice the standard
+   error of an r estimate (the estimates are biased).
 3. **Uncertainty.** Impacts are resampled with ``numpy.random.default_rng(seed)``;
    each resample refits the chosen terms (coefficient percentile CIs, pointwise
    band of r(v)) and re-runs the selection over the same candidate list (how often
@@ -167,7 +167,7 @@ EFFECT_PER_SIGMA = 1.5
 RISING_FACTOR = 4.0
 #: Share of the impacts at each end of the speed range for :data:`EFFECT_PER_SIGMA`.
 _END_SHARE = 0.1
-#: r above 1 by more than this many standard errors of the r estimates is flagged.
+#: r above 1 by more than this many standard errors of the r estimates: biased estimates.
 _ABOVE_ONE = 2.0
 _N_THRESHOLDS = 8
 #: A candidate whose terms' own changes of r add up to more than this many times the
@@ -849,23 +849,30 @@ def _end_error(v: np.ndarray, sig: np.ndarray | None) -> float:
 
 
 def _above_one(r_fit: np.ndarray, sig: np.ndarray | None, precision: float) -> str | None:
-    """Warning when the law's r exceeds 1 by more than twice the precision of an r.
+    """Warning when the law's r exceeds 1 anywhere over the observed speeds.
 
-    A passive wall cannot return more energy than it receives: r above 1 beyond the
-    standard error of the r estimates (median ``sig``, or the scatter ``precision``
-    without it; what repeats from impact to impact does not average out) says that
-    the estimates are biased, not that the wall is active.
+    A passive wall cannot return more energy than it receives. Beyond
+    :data:`_ABOVE_ONE` standard errors of an r estimate (median ``sig``, or the
+    scatter ``precision`` without it; what repeats from impact to impact does not
+    average out) the estimates are biased; within them, r is only known to be near 1
+    or the estimates are biased.
     """
     if r_fit.size == 0:
         return None
-    s = float(np.median(sig)) if sig is not None and sig.size else float(precision)
+    s = max(float(np.median(sig)) if sig is not None and sig.size else float(precision), 0.0)
     top = float(np.max(r_fit))
-    if not (math.isfinite(top) and top > 1.0 + _ABOVE_ONE * max(s, 0.0)):
+    if not (math.isfinite(top) and top > 1.0):
         return None
-    return (f"r reaches {top:.4g} over the observed speeds, above 1 by more than "
-            f"{_ABOVE_ONE:g} standard errors ({s:.2g}) of the r estimates: a passive wall "
-            "returns less energy than it receives, so these estimates are biased (missed "
-            "or merged impacts, the flight law, the pulse model); not a physical law")
+    if top > 1.0 + _ABOVE_ONE * s:
+        return (f"r reaches {top:.4g} over the observed speeds, above 1 by more than "
+                f"{_ABOVE_ONE:g} standard errors ({s:.2g}) of the r estimates: a passive "
+                "wall returns less energy than it receives, so these estimates are biased "
+                "(missed or merged impacts, the flight law, the pulse model); not a "
+                "physical law")
+    return (f"r reaches {top:.4g} over the observed speeds, above 1 but within "
+            f"{_ABOVE_ONE:g} standard errors ({s:.2g}) of the r estimates: r is not "
+            "physical above 1; at this precision the wall is near-elastic or the "
+            "estimates are biased")
 
 
 def _fallback(v: np.ndarray, r: np.ndarray, sw: np.ndarray, *, n_dropped: int,

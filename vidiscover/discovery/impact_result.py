@@ -154,9 +154,9 @@ class ImpactLawResult:
     level : float
         Confidence level of ``ci`` and :meth:`band`.
     warning : str or None
-        Why the fit fell back to a constant (or found nothing), and whether r
-        exceeds 1 over the observed speeds by more than twice the standard error of
-        an r estimate (a passive wall cannot: the estimates are biased), else None.
+        Why the fit fell back to a constant (or found nothing), and that r exceeds
+        1 over the observed speeds (a passive wall cannot), saying whether by more
+        than twice the standard error of an r estimate (biased estimates), else None.
     boot_coefficients : ndarray, shape (n_boot, len(terms))
         Refitted coefficients per resample.
     effect : float
