@@ -489,7 +489,25 @@ def _best_pair(model, nominal, fits, n_jobs, scheduler, max_params=None):
         refits[k] = r
     pairs = [_as_pair(a, s, r) for (a, s), r in zip(done, refits)]
     n = sum(p.n_sims for p in pairs)
-    return _parsimonious_pair(pairs), n
+    best = _parsimonious_pair(pairs)
+    # the best pair has a law per wall whose simpler counterpart (constants per wall
+    # with the same other effect) was not among the pairs tried (forward selection
+    # runs on top of the best single effect only): fit it, so that the parsimony
+    # rule can choose it
+    for rich, simple in NESTED.items():
+        names = set(best.name.split("+"))
+        fs = next((f for f in fits if f.name == simple), None)
+        if rich not in names or fs is None or len(names) != 2:
+            continue
+        other = (names - {rich}).pop()
+        if any(set(p.name.split("+")) == {simple, other} for p in pairs):
+            continue
+        step = _pair_step((model, fs, other))
+        if step is not None:
+            pairs.append(_as_pair(fs, step, None))
+            n += step.n_sims
+            best = _parsimonious_pair(pairs)
+    return best, n
 
 
 def _parsimonious_pair(pairs: list[CandidateFit]) -> CandidateFit:
