@@ -984,14 +984,13 @@ class _Fitter:
                                   "reliable": bool, "clipped": bool, "dropout": bool,
                                   "side_check": bool, "merged": bool})
         c, d = self._split()
-        p = self.pad
-        rpad = np.concatenate([np.zeros(p), resid, np.zeros(p)])
-        cpad = np.concatenate([np.zeros(p, bool), clip, np.zeros(p, bool)])
-        npad = np.concatenate([np.zeros(p, bool), nan, np.zeros(p, bool)])
+        # (the record's samples at the window indices, zero / False outside it: no padded
+        # copies of a long record)
         ksum = self.kernel_rows(self.jw, d, self.amp).sum(axis=1) / fs
-        area = self.amp * ksum + rpad[c[:, None] + self.jw[None, :] + p].sum(axis=1) / fs
-        win = c[:, None] + self.jl[None, :] + p
-        main = c[:, None] + np.arange(-2, 3)[None, :] + p
+        area = self.amp * ksum + _take(resid, c[:, None] + self.jw[None, :], 0.0).sum(axis=1) / fs
+        win = c[:, None] + self.jl[None, :]
+        main = c[:, None] + np.arange(-2, 3)[None, :]
+        bad = clip | nan
         return {
             "t": t0 + self.pos / fs - self.side_value(delays),
             "side": np.where(self.amp > 0, "right", "left"),
@@ -1000,14 +999,14 @@ class _Fitter:
             "snr": self.snr(sigma),
             "peak": self.amp * self.side_value(self.peaks),
             "sample": np.clip(c, 0, n - 1),
-            "reliable": ~(cpad | npad)[main].any(axis=1),
-            "clipped": cpad[win].any(axis=1),
-            "dropout": npad[win].any(axis=1),
+            "reliable": ~_take(bad, main, False).any(axis=1),
+            "clipped": _take(clip, win, False).any(axis=1),
+            "dropout": _take(nan, win, False).any(axis=1),
             "side_check": np.ones(self.n, dtype=bool),
-            "merged": self._misfit(rpad, win, sigma, model_error),
+            "merged": self._misfit(_take(resid, win, 0.0), sigma, model_error),
         }
 
-    def _misfit(self, rpad, win, sigma, model_error) -> np.ndarray:
+    def _misfit(self, rwin, sigma, model_error) -> np.ndarray:
         """Pulses whose fit leaves a residual beyond noise and model error: unresolved.
 
         The RMS residual over the fit window is compared with the noise plus
@@ -1015,10 +1014,18 @@ class _Fitter:
         ``_MERGED`` times that, a second pulse (chatter closer than the band limit
         resolves) most likely hides in it.
         """
-        rms = np.sqrt(np.mean(rpad[win] ** 2, axis=1))
+        rms = np.sqrt(np.mean(rwin ** 2, axis=1))
         expected = np.hypot(sigma, model_error * np.abs(self.amp) * self.side_value(self.peaks))
         return rms > _MERGED * expected
 
+
+
+def _take(arr: np.ndarray, idx: np.ndarray, fill) -> np.ndarray:
+    """``arr[idx]`` with ``fill`` where ``idx`` lies outside the record."""
+    inside = (idx >= 0) & (idx < arr.size)
+    out = arr[np.clip(idx, 0, arr.size - 1)]
+    out[~inside] = fill
+    return out
 
 def _fit_windows(Y, W, grid, basis, Qm, pulse, fs, jl):
     """Sub-sample delay, area and fitted energy of one pulse per row of ``Y`` (weights ``W``)."""

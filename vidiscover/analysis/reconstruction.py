@@ -233,9 +233,6 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
     V_s = np.empty(n)
     V_s[0] = 0.0
     np.cumsum(0.5 * (a[1:] + a[:-1]) * dt, out=V_s[1:])
-    X_s = np.empty(n)
-    X_s[0] = 0.0
-    np.cumsum(0.5 * (V_s[1:] + V_s[:-1]) * dt, out=X_s[1:])
     ti = t_imp - t[0]
     # states at the impacts: linear interpolation between the samples about them
     # (taken from each full-length array as soon as it is made, so it can be dropped)
@@ -252,13 +249,39 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
     # (float even without impacts: bincount of no weights is an integer array)
     S = np.bincount(first, weights=dv, minlength=n + 1)[:n].astype(float, copy=False)
     np.cumsum(S, out=S)
-    lin_X, lin_V = lin(X_s), lin(V_s)
+    lin_V = lin(V_s)
+    # X_raw = X_s + S tr - SdT: the integral X_s of V_s and the running sum SdT of the
+    # jumps' dv t_i are made part by part, never whole (each a sequential sum with the
+    # previous part's last value folded into its first term: the whole cumsum's values)
     X_raw = S * tr
-    X_raw += X_s                     # the operations and their order of X_s + S tr - SdT
-    del X_s
-    SdT = np.bincount(first, weights=dv * ti, minlength=n + 1)[:n].astype(float, copy=False)
-    X_raw -= np.cumsum(SdT, out=SdT)
-    del SdT
+    X_k, X_k1 = np.empty(k.size), np.empty(k.size)
+    dvt = dv * ti
+    carry = carry_t = 0.0
+    for lo in range(0, n, _PART):
+        hi = min(lo + _PART, n)
+        xs = np.empty(hi - lo)
+        if lo == 0:
+            xs[0] = 0.0
+            xs[1:] = 0.5 * (V_s[1:hi] + V_s[:hi - 1]) * dt
+        else:
+            xs[:] = 0.5 * (V_s[lo:hi] + V_s[lo - 1:hi - 1]) * dt
+            xs[0] += carry
+        np.cumsum(xs, out=xs)
+        carry = xs[-1]
+        for arr, at in ((X_k, k), (X_k1, k + 1)):
+            here = (at >= lo) & (at < hi)
+            arr[here] = xs[at[here] - lo]
+        X_raw[lo:hi] += xs               # the operations and their order of X_s + S tr - SdT
+        del xs
+        sel = (first >= lo) & (first < hi)
+        sdt = np.bincount(first[sel] - lo, weights=dvt[sel], minlength=hi - lo).astype(
+            float, copy=False)
+        sdt[0] += carry_t
+        np.cumsum(sdt, out=sdt)
+        carry_t = sdt[-1]
+        X_raw[lo:hi] -= sdt
+        del sdt
+    lin_X = X_k * (1 - f) + X_k1 * f      # lin(X_s)
     xl = np.asarray(rec.x, dtype=float)
     okx = np.isfinite(xl)
     if not okx.any():
