@@ -62,6 +62,7 @@ import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from ..acquisition import (
     CAUSAL_KINDS,
@@ -852,9 +853,14 @@ def learn_pulse(a: np.ndarray, fs: float, bad: np.ndarray | None = None, *,
     order = np.argsort(-np.abs(Y[:, pre]), kind="stable")
     peaks, Y, sign = peaks[order], Y[order], sign[order]
     obj = _Objective(Y, fs, pre, post, sign)
-    results = _unresolved_durations_to_zero(obj, _search(obj, tuple(kinds), fs, int(halfwidth)))
-    results = _mounted(obj, results, fs, int(halfwidth))
-    results = _polish_cutoff(obj, results)
+    # the search's hundreds of small matrix products (tens of rows): a BLAS thread pool
+    # costs more than it gives there (2.0 s instead of 5.8 s with one thread on a loaded
+    # 2-core machine, the same results)
+    with threadpool_limits(limits=1, user_api="blas"):
+        results = _unresolved_durations_to_zero(obj, _search(obj, tuple(kinds), fs,
+                                                             int(halfwidth)))
+        results = _mounted(obj, results, fs, int(halfwidth))
+        results = _polish_cutoff(obj, results)
     best = results[0][1]
     _, shift, amp = obj.fit(best)
     error_lag, error_env = _error_envelope(obj, best, shift, amp, sigma)
