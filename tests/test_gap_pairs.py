@@ -109,3 +109,24 @@ def test_a_law_per_wall_counts_as_one_only_when_r_varies_over_the_recorded_speed
     # a steep law on a wall whose impacts all come at one speed changes nothing
     assert _law_spread(law(0.0, right_a=1.0), real) < LAW_SPREAD
     assert _law_spread(_fit("asymmetric_restitution", 1.0, {"r_right": 0.8}, 2), real) == 0.0
+
+
+def test_a_pair_whose_law_per_wall_has_no_slope_is_reported_as_constants_per_wall():
+    from vidiscover.gap.diagnose import _constant_laws
+
+    laws = {"right": "linear:0.868:0", "left": "linear:0.492:0"}
+    fx = Effects({"velocity_dependent_restitution": laws, "coulomb_friction": {"mu": 0.16}})
+    pair = CandidateFit(name="coulomb_friction+velocity_dependent_restitution",
+                        params={"coulomb_friction": {"mu": 0.16},
+                                "velocity_dependent_restitution": laws},
+                        n_params=5, r=0.7, effects=fx, gap=GapComponents({"s": 3.0}, {}),
+                        signature=None)
+    out = _constant_laws(pair)
+    assert out.name == "coulomb_friction+asymmetric_restitution" and out.n_params == 3
+    assert out.params["asymmetric_restitution"] == {"r_right": 0.868, "r_left": 0.492}
+    assert set(out.effects.active) == {"coulomb_friction", "asymmetric_restitution"}
+    assert out.score == pytest.approx(3.0 + 2.0 * 3)
+    sloped = dict(laws, left="linear:0.492:0.1")
+    pair2 = _fit("coulomb_friction+velocity_dependent_restitution", 3.0,
+                 {"coulomb_friction": {"mu": 0.16}, "velocity_dependent_restitution": sloped}, 5)
+    assert _constant_laws(pair2) is pair2

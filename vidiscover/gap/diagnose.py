@@ -487,7 +487,7 @@ def _best_pair(model, nominal, fits, n_jobs, scheduler, max_params=None):
     for k, r in zip(again, _map([(model, *done[k]) for k in again], n_jobs, scheduler,
                                 worker=_pair_refit)):
         refits[k] = r
-    pairs = [_as_pair(a, s, r) for (a, s), r in zip(done, refits)]
+    pairs = [_constant_laws(_as_pair(a, s, r)) for (a, s), r in zip(done, refits)]
     n = sum(p.n_sims for p in pairs)
     best = _parsimonious_pair(pairs)
     # the best pair has a law per wall whose simpler counterpart (constants per wall
@@ -504,10 +504,30 @@ def _best_pair(model, nominal, fits, n_jobs, scheduler, max_params=None):
             continue
         step = _pair_step((model, fs, other))
         if step is not None:
-            pairs.append(_as_pair(fs, step, None))
+            pairs.append(_constant_laws(_as_pair(fs, step, None)))
             n += step.n_sims
             best = _parsimonious_pair(pairs)
     return best, n
+
+
+def _constant_laws(pair: CandidateFit) -> CandidateFit:
+    """A pair whose law per wall has zero slopes, as constants per wall (same physics).
+
+    Any other pair is returned unchanged.
+    """
+    rich, simple = "velocity_dependent_restitution", "asymmetric_restitution"
+    if rich not in pair.params:
+        return pair
+    laws = [str(pair.params[rich].get(side, "")).split(":") for side in ("right", "left")]
+    if not all(p[0] == "linear" and len(p) == 3 and float(p[2]) == 0.0 for p in laws):
+        return pair
+    walls = {"r_right": float(laws[0][1]), "r_left": float(laws[1][1])}
+    params = {(simple if k == rich else k): (walls if k == rich else v)
+              for k, v in pair.params.items()}
+    return dataclasses.replace(
+        pair, name="+".join(simple if n == rich else n for n in pair.name.split("+")),
+        params=params, n_params=pair.n_params - 2,
+        effects=pair.effects.without(rich).with_effect(simple, **walls))
 
 
 def _parsimonious_pair(pairs: list[CandidateFit]) -> CandidateFit:
