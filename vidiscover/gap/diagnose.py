@@ -15,6 +15,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from threadpoolctl import threadpool_limits
 
 from ..effects import Effects
 from ..errors import InputError
@@ -637,6 +638,14 @@ def diagnose(rec, *, seed: int = 0, n_jobs: int | None = None, scheduler=None,
     InputError
         For an unknown candidate name.
     """
+    # the parent's products are small (a recording's columns, tens of parameters): a
+    # BLAS thread pool spins against the workers' cores there (joblib holds the
+    # workers' own pools to one thread)
+    with threadpool_limits(limits=1, user_api="blas"):
+        return _diagnose(rec, seed, n_jobs, scheduler, candidates, an)
+
+
+def _diagnose(rec, seed, n_jobs, scheduler, candidates, an) -> GapReport:
     names = list(CANDIDATES) if candidates is None else list(candidates)
     unknown = [n for n in names if n not in CANDIDATES]
     if unknown:
