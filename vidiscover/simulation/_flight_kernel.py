@@ -235,6 +235,41 @@ def _interval(M, S, ta, tb, za, zb, zda, zdb, start_wall, friction, rest):
 
 
 @njit(cache=True, nogil=True)
+def _window_coeffs(M, S, ta, F0, sign, cz):
+    """``sign`` times the coefficients of x(ta + s) on the window basis, into ``cz``.
+
+    :meth:`.flows.Oscillator.window_coeffs`: constant, the harmonics' (v_j / w, x_j)
+    at ``ta``, and the homogeneous pair; ``S`` holds the segment's (t0, C1, C2, ., cv1,
+    cv2).
+    """
+    nh = int(M[_NH])
+    ncols = cz.size
+    cz[0], cz[1], cz[2] = sign * (F0 / M[_K]), sign * 0.0, sign * 0.0
+    for j in range(nh):
+        w, pa, pb = M[_HEAD + j], M[_HEAD + nh + j], M[_HEAD + 2 * nh + j]
+        sn, cs = math.sin(w * ta), math.cos(w * ta)
+        cz[3 + 2 * j] = sign * (pa * cs - pb * sn)
+        cz[4 + 2 * j] = sign * (pa * sn + pb * cs)
+    sg, wd = M[_SG], M[_WD]
+    tau = ta - S[0]
+    e = math.exp(-sg * tau)
+    cs, sn = math.cos(wd * tau), math.sin(wd * tau)
+    xh = e * (S[1] * cs + S[2] * sn)
+    vh = e * (S[4] * cs - S[5] * sn)
+    cz[ncols - 2], cz[ncols - 1] = sign * xh, sign * ((vh + sg * xh) / wd)
+
+
+@njit(cache=True, nogil=True)
+def _matvec(B, c, out):
+    """Write B @ c into ``out``, row by row (a window is a few hundred numbers)."""
+    for i in range(B.shape[0]):
+        acc = 0.0
+        for j in range(B.shape[1]):
+            acc += B[i, j] * c[j]
+        out[i] = acc
+
+
+@njit(cache=True, nogil=True)
 def next_event(M, B01, t0, x0, v0, y0, w0, F0, ab, t_end, start_wall, friction):
     """The first event of the flight that starts at ``t0`` in state (x0, v0, y0, w0).
 
@@ -259,7 +294,6 @@ def next_event(M, B01, t0, x0, v0, y0, w0, F0, ab, t_end, start_wall, friction):
         Time and kind of the event (RIGHT, LEFT, ZERO, or END at ``t_end``), the LO's
         state there and the homogeneous coefficients of the flight's LO flow.
     """
-    nh = int(M[_NH])
     n = int(M[_N])
     h, sg, wd = M[_H], M[_SG], M[_WD]
     # homogeneous coefficients (Oscillator.coefficients)
@@ -279,28 +313,13 @@ def next_event(M, B01, t0, x0, v0, y0, w0, F0, ab, t_end, start_wall, friction):
     te, kind = t_end, END
     ta = t0
     while ta < t_end:
-        # window coefficients of x(ta + s) (Oscillator.window_coeffs), negated, plus the
-        # ball's parabola
-        cz[0], cz[1], cz[2] = -(F0 / M[_K]), -0.0, -0.0
-        for j in range(nh):
-            w, pa, pb = M[_HEAD + j], M[_HEAD + nh + j], M[_HEAD + 2 * nh + j]
-            sn, cs = math.sin(w * ta), math.cos(w * ta)
-            cz[3 + 2 * j] = -(pa * cs - pb * sn)
-            cz[4 + 2 * j] = -(pa * sn + pb * cs)
+        # the window's z = y - x: the LO's coefficients negated plus the ball's parabola
+        _window_coeffs(M, S, ta, F0, -1.0, cz)
         tau = ta - t0
-        e = math.exp(-sg * tau)
-        cs, sn = math.cos(wd * tau), math.sin(wd * tau)
-        xh = e * (C1 * cs + C2 * sn)
-        vh = e * ((C2 * wd - sg * C1) * cs - (C1 * wd + sg * C2) * sn)
-        cz[ncols - 2], cz[ncols - 1] = -xh, -((vh + sg * xh) / wd)
         cz[0] += y0 + w0 * tau + 0.5 * ab * tau * tau
         cz[1] += w0 + ab * tau
         cz[2] += 0.5 * ab
-        for i in range(B01.shape[0]):
-            acc = 0.0
-            for j in range(ncols):
-                acc += B01[i, j] * cz[j]
-            zz[i] = acc
+        _matvec(B01, cz, zz)
         found = False
         for k in range(n):
             zk = zz[k + 1]
@@ -347,7 +366,7 @@ def stuck_release(M, B2, t0, x0, v0, F0, gs, mug, where, t_end):
         Release time (``t_end`` if none), the sign of the sliding that follows (0 at
         the end), the LO's state at ``te`` and the phase's homogeneous coefficients.
     """
-    nh, n = int(M[_NH]), int(M[_N])
+    n = int(M[_N])
     h, sg, wd = M[_H], M[_SG], M[_WD]
     xp, vp = _particular(M, t0, F0)
     h0, hv0 = x0 - xp, v0 - vp
@@ -360,24 +379,9 @@ def stuck_release(M, B2, t0, x0, v0, F0, gs, mug, where, t_end):
     q = np.empty(B2.shape[0])
     ta = t0
     while ta < t_end:
-        # window coefficients of x(ta + s) (Oscillator.window_coeffs)
-        cz[0], cz[1], cz[2] = F0 / M[_K], 0.0, 0.0
-        for j in range(nh):
-            w, pa, pb = M[_HEAD + j], M[_HEAD + nh + j], M[_HEAD + 2 * nh + j]
-            sn, cs = math.sin(w * ta), math.cos(w * ta)
-            cz[3 + 2 * j] = pa * cs - pb * sn
-            cz[4 + 2 * j] = pa * sn + pb * cs
-        tau = ta - t0
-        e = math.exp(-sg * tau)
-        cs, sn = math.cos(wd * tau), math.sin(wd * tau)
-        xh = e * (C1 * cs + C2 * sn)
-        vh = e * (S[4] * cs - S[5] * sn)
-        cz[ncols - 2], cz[ncols - 1] = xh, (vh + sg * xh) / wd
-        for i in range(B2.shape[0]):
-            acc = 0.0
-            for j in range(ncols):
-                acc += B2[i, j] * cz[j]
-            q[i] = acc - gs
+        _window_coeffs(M, S, ta, F0, 1.0, cz)
+        _matvec(B2, cz, q)
+        q -= gs
         for k in range(1, n + 1):
             qk = q[k]
             if where == RIGHT:
