@@ -22,15 +22,11 @@ Usage: ``python benchmarks/bench_sweep.py [--n 1000] [--skip-serial] [--skip-das
 from __future__ import annotations
 
 import argparse
-import contextlib
 import os
 import platform
-import shutil
-import socket
-import subprocess
 import sys
-import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -65,44 +61,6 @@ def _stage_times(values, settle, duration, sample):
         for k, dt in zip(stages, (t1 - t0, t2 - t1, t3 - t2, t4 - t3)):
             stages[k].append(dt)
     return {k: float(np.mean(v)) for k, v in stages.items()}
-
-
-@contextlib.contextmanager
-def command_line_cluster(workers: int):
-    """A ``dask scheduler`` and ``workers`` single-thread ``dask worker`` processes on
-    loopback, started from the command line; yields the scheduler address."""
-    import distributed
-
-    exe = shutil.which("dask", path=os.path.dirname(sys.executable)) or shutil.which("dask")
-    if exe is None:
-        raise SystemExit("the dask command line is not installed (pip install -e '.[dask]')")
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    address = f"tcp://127.0.0.1:{port}"
-    env = {**os.environ, "PYTHONWARNINGS": "ignore"}
-    with tempfile.TemporaryDirectory() as log:
-        procs = [subprocess.Popen([exe, "scheduler", "--host", "127.0.0.1", "--port",
-                                   str(port), "--dashboard-address", ":0", "--no-show"],
-                                  stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                                  env=env)]
-        try:
-            for k in range(workers):
-                procs.append(subprocess.Popen(
-                    [exe, "worker", address, "--nthreads", "1", "--nworkers", "1",
-                     "--no-dashboard", "--local-directory", os.path.join(log, f"w{k}")],
-                    stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env))
-            with distributed.Client(address, timeout="60s") as c:
-                c.wait_for_workers(workers, timeout=120)
-            yield address
-        finally:
-            for p in procs[::-1]:
-                p.terminate()
-            for p in procs:
-                try:
-                    p.wait(timeout=20)
-                except subprocess.TimeoutExpired:
-                    p.kill()
 
 
 def main() -> None:
@@ -170,6 +128,9 @@ def main() -> None:
                                                processes=True, host="127.0.0.1",
                                                dashboard_address=None)
         else:
+            sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "tests"))
+            from dask_cluster import command_line_cluster
+
             cluster = command_line_cluster(args.workers)
         with cluster as where, distributed.Client(where) as client:
             start = time.perf_counter() - t

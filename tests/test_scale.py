@@ -129,44 +129,12 @@ def test_sweep_rows_identical_serial_joblib_and_local_cluster(client):
 def real_cluster(tmp_path_factory):
     """A ``dask scheduler`` and two ``dask worker`` processes on loopback, started as a
     user would start them (command line), stopped afterwards."""
-    import os
-    import shutil
-    import socket
-    import subprocess
-    import time
+    from dask_cluster import command_line_cluster, dask_command
 
-    exe = shutil.which("dask", path=os.path.dirname(sys.executable)) or shutil.which("dask")
-    if exe is None:
+    if dask_command() is None:
         pytest.skip("the dask command line is not installed")
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        port = s.getsockname()[1]
-    address = f"tcp://127.0.0.1:{port}"
-    log = tmp_path_factory.mktemp("dask")
-    env = {**os.environ, "PYTHONWARNINGS": "ignore"}
-    procs = [subprocess.Popen([exe, "scheduler", "--host", "127.0.0.1", "--port", str(port),
-                               "--dashboard-address", ":0", "--no-show"],
-                              stdout=open(log / "s.log", "w"), stderr=subprocess.STDOUT,
-                              env=env)]
-    time.sleep(1.0)
-    for k in range(2):
-        procs.append(subprocess.Popen([exe, "worker", address, "--nthreads", "1",
-                                       "--nworkers", "1", "--no-dashboard",
-                                       "--local-directory", str(log / f"w{k}")],
-                                      stdout=open(log / f"w{k}.log", "w"),
-                                      stderr=subprocess.STDOUT, env=env))
-    try:
-        with distributed.Client(address, timeout="30s") as c:
-            c.wait_for_workers(2, timeout=60)
+    with command_line_cluster(2, log_dir=str(tmp_path_factory.mktemp("dask"))) as address:
         yield address
-    finally:
-        for p in procs[::-1]:
-            p.terminate()
-        for p in procs:
-            try:
-                p.wait(timeout=20)
-            except subprocess.TimeoutExpired:
-                p.kill()
 
 
 @pytest.mark.slow
