@@ -119,3 +119,11 @@ def test_bad_input_is_one_line_exit_2_and_no_output(recordings, tmp_path, args, 
     assert words in result.stderr and len(result.stderr.strip().splitlines()) == 1
     assert "Traceback" not in result.output and result.stdout == ""
     assert not out.exists()
+
+
+def test_help_states_the_default_min_effect_in_use():
+    """The help text cannot import the discovery (lazy CLI): it states the number, checked here."""
+    from vidiscover.discovery.impact_law import MIN_EFFECT
+
+    out = CliRunner().invoke(main, ["discover", "--help"]).output
+    assert f"default: {MIN_EFFECT:g}," in " ".join(out.split())

@@ -191,7 +191,8 @@ def human_lines(doc: dict) -> list[str]:
               show_default=True, help="Impact-law selection: AICc window or CV one-SE rule.")
 @click.option("--min-effect", type=float, default=None,
               help="Smallest change of r over the observed speeds for a reported speed "
-                   "dependence [default: 0.006, calibrated on constant-r data].")
+                   "dependence [default: 0.004, calibrated on constant-r data; "
+                   "discovery.impact_law.MIN_EFFECT].")
 @click.option("--max-tilt", type=float, default=10.0, show_default=True,
               help="Largest admissible |theta| of the flight law (deg).")
 @channels_option
