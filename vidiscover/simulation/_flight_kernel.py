@@ -191,7 +191,11 @@ def _newton(mode, M, S, td, a, b, fa, fb, x0):
 
 @njit(cache=True, nogil=True)
 def _after_extremum(p, q, fp, fq):
-    """Root estimate of f on [p, q] when f'(p) = 0 (engine._after_extremum)."""
+    """Root estimate of f on [p, q] when f'(p) = 0: f ~ fp + (fq - fp) ((t - p)/(q - p))^2.
+
+    The secant start is poor there (f is flat at p: Newton from it overshoots and then
+    creeps back, halving the error per step); the root of this parabola is not.
+    """
     return p + (q - p) * math.sqrt(fp / (fp - fq))
 
 
@@ -200,7 +204,6 @@ def _interval(M, S, ta, tb, za, zb, zda, zdb, start_wall, friction, rest):
     """The first event in one grid interval: (time, kind), kind MIDDLE for none."""
     b, t0 = M[_B], S[0]
     # up to two pieces, split at an extremum of z
-    p0, zp0, q0, zq0 = ta, za, tb, zb
     two = False
     te = ze = 0.0
     if rest:
@@ -221,7 +224,7 @@ def _interval(M, S, ta, tb, za, zb, zda, zdb, start_wall, friction, rest):
         elif two:
             p, zp, q, zq, ends = te, ze, tb, zb, False
         else:
-            p, zp, q, zq, ends = p0, zp0, q0, zq0, False
+            p, zp, q, zq, ends = ta, za, tb, zb, False
         at_start = abs(p - t0) <= 1e-15 * max(1.0, abs(t0))
         if not (at_start and start_wall == RIGHT) and zp - b < 0.0 <= zq - b:
             x0 = _after_extremum(p, q, zp - b, zq - b) if i else math.nan
@@ -232,6 +235,24 @@ def _interval(M, S, ta, tb, za, zb, zda, zdb, start_wall, friction, rest):
         if ends and friction and q - t0 > 1e-12:
             return q, ZERO
     return 0.0, MIDDLE
+
+
+@njit(cache=True, nogil=True)
+def _segment(M, t0, x0, v0, F0):
+    """The constants ``S`` of a segment of the LO's flow started at ``t0`` in (x0, v0).
+
+    ``S[0:6]`` = (t0, C1, C2, F0 / k, cv1, cv2): the homogeneous coefficients
+    (Oscillator.coefficients) and those of its velocity; ``S[6:10]`` are left for the
+    ball's (y0, w0, ab, ab / 2) in a flight, ``S[6]`` for the threshold of a release.
+    """
+    sg, wd = M[_SG], M[_WD]
+    xp, vp = _particular(M, t0, F0)
+    h0, hv0 = x0 - xp, v0 - vp
+    C1, C2 = h0, (hv0 + sg * h0) / wd
+    S = np.zeros(10)
+    S[0], S[1], S[2], S[3] = t0, C1, C2, F0 / M[_K]
+    S[4], S[5] = C2 * wd - sg * C1, C1 * wd + sg * C2
+    return S
 
 
 @njit(cache=True, nogil=True)
@@ -294,15 +315,9 @@ def next_event(M, B01, t0, x0, v0, y0, w0, F0, ab, t_end, start_wall, friction):
         Time and kind of the event (RIGHT, LEFT, ZERO, or END at ``t_end``), the LO's
         state there and the homogeneous coefficients of the flight's LO flow.
     """
-    n = int(M[_N])
-    h, sg, wd = M[_H], M[_SG], M[_WD]
-    # homogeneous coefficients (Oscillator.coefficients)
-    xp, vp = _particular(M, t0, F0)
-    h0, hv0 = x0 - xp, v0 - vp
-    C1, C2 = h0, (hv0 + sg * h0) / wd
-    S = np.empty(10)
-    S[0], S[1], S[2], S[3] = t0, C1, C2, F0 / M[_K]
-    S[4], S[5] = C2 * wd - sg * C1, C1 * wd + sg * C2
+    n, h = int(M[_N]), M[_H]
+    S = _segment(M, t0, x0, v0, F0)
+    C1, C2 = S[1], S[2]
     S[6], S[7], S[8], S[9] = y0, w0, ab, 0.5 * ab
     ncols = B01.shape[1]
     cz = np.empty(ncols)
@@ -366,14 +381,9 @@ def stuck_release(M, B2, t0, x0, v0, F0, gs, mug, where, t_end):
         Release time (``t_end`` if none), the sign of the sliding that follows (0 at
         the end), the LO's state at ``te`` and the phase's homogeneous coefficients.
     """
-    n = int(M[_N])
-    h, sg, wd = M[_H], M[_SG], M[_WD]
-    xp, vp = _particular(M, t0, F0)
-    h0, hv0 = x0 - xp, v0 - vp
-    C1, C2 = h0, (hv0 + sg * h0) / wd
-    S = np.zeros(10)
-    S[0], S[1], S[2], S[3] = t0, C1, C2, F0 / M[_K]
-    S[4], S[5] = C2 * wd - sg * C1, C1 * wd + sg * C2
+    n, h = int(M[_N]), M[_H]
+    S = _segment(M, t0, x0, v0, F0)
+    C1, C2 = S[1], S[2]
     ncols = B2.shape[1]
     cz = np.empty(ncols)
     q = np.empty(B2.shape[0])

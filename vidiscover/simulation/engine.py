@@ -234,7 +234,8 @@ class _Loop:
         self.impacts: list[tuple] = []
         self.sticks: list[tuple] = []
         self.n_events = 0
-        # numba loads only here, with the first simulation, never at import
+        # the compiled event search: numba is imported with the first model (_Model),
+        # never with the package
         from ._flight_kernel import next_event, stuck_release
         self._next_event, self._stuck_release = next_event, stuck_release
 
@@ -321,63 +322,6 @@ class _Loop:
             y = x - m.b
         self.segs.append((t0, te, FLIGHT, C1, C2, F0, y0, w0, ab, 0.0))
         return te, x, v, y, w, _KINDS[kind]
-
-    @staticmethod
-    def _flight_functions(osc, t0, C1, C2, F0, y0, w0, ab, b):
-        """LO state and event functions of a flight: z and its derivatives, closed form.
-
-        The same arithmetic as ``Oscillator.state`` (term by term, in the same
-        order, so the values are bit-identical), inlined with the per-flight
-        constants hoisted: these closures are the innermost loop of the simulator.
-        """
-        exp, sin, cos = math.exp, math.sin, math.cos
-        sg, wd, km = osc.sigma, osc.wd, osc.k / osc.m
-        nsg, m2sg = -sg, -2.0 * sg
-        cv1, cv2 = C2 * wd - sg * C1, C1 * wd + sg * C2
-        xs = F0 / osc.k
-        hab = 0.5 * ab
-        terms = [(w, w * w, pa, pb) for w, pa, pb in osc._terms]
-
-        def lo_xv(t):
-            x, v = xs, 0.0
-            for w, _, pa, pb in terms:
-                sn, cs = sin(w * t), cos(w * t)
-                x += pa * sn + pb * cs
-                v += w * (pa * cs - pb * sn)
-            tau = t - t0
-            e = exp(nsg * tau)
-            cs, sn = cos(wd * tau), sin(wd * tau)
-            return tau, x + e * (C1 * cs + C2 * sn), v + e * (cv1 * cs - cv2 * sn)
-
-        def zf(t):
-            x, v, a = xs, 0.0, 0.0
-            for w, ww, pa, pb in terms:
-                sn, cs = sin(w * t), cos(w * t)
-                x += pa * sn + pb * cs
-                v += w * (pa * cs - pb * sn)
-                a -= ww * (pa * sn + pb * cs)
-            tau = t - t0
-            e = exp(nsg * tau)
-            cs, sn = cos(wd * tau), sin(wd * tau)
-            xh = e * (C1 * cs + C2 * sn)
-            vh = e * (cv1 * cs - cv2 * sn)
-            ah = m2sg * vh - km * xh
-            return (y0 + w0 * tau + hab * tau * tau - (x + xh), w0 + ab * tau - (v + vh),
-                    ab - (a + ah))
-
-        def f_right(t):
-            tau, x, v = lo_xv(t)
-            return y0 + w0 * tau + hab * tau * tau - x - b, w0 + ab * tau - v
-
-        def f_left(t):
-            tau, x, v = lo_xv(t)
-            return y0 + w0 * tau + hab * tau * tau - x + b, w0 + ab * tau - v
-
-        def f_zero(t):
-            _, zd, zdd = zf(t)
-            return zd, zdd
-
-        return lo_xv, zf, f_right, f_left, f_zero
 
     # ------------------------------------------------------------------ impact
     def _impact(self, t, x, v, y, w, side):
