@@ -242,8 +242,7 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
     cdv = np.concatenate([[0.0], np.cumsum(dv)])
     cdvt = np.concatenate([[0.0], np.cumsum(dv * ti)])
     # jumps of the impacts strictly before each sample, as running sums
-    first = np.minimum(np.floor(ti * fs).astype(np.int64) + 1, n)
-    first += (first < n) & (first > 0) & (tr[np.clip(first - 1, 0, n - 1)] > ti)
+    first = _first_samples(t, ti, fs)
     # (full-length arrays are combined in place and dropped when done: a long record
     # holds millions of samples per array)
     # (float even without impacts: bincount of no weights is an integer array)
@@ -470,9 +469,7 @@ def refly(recon: Reconstruction, det: ImpactDetection, mu: float, *,
     ti = det.t - tr0
     dv = det.dv
     cdv = np.concatenate([[0.0], np.cumsum(dv)])
-    # the sample from which each jump counts in v (as in reconstruct)
-    first = np.minimum(np.floor(ti * fs).astype(np.int64) + 1, n)
-    first += (first < n) & (first > 0) & ((t[np.clip(first - 1, 0, n - 1)] - tr0) > ti)
+    first = _first_samples(t, ti, fs)       # the sample from which each jump counts in v
 
     def lo_velocity(tq):
         # v less the jumps counted in it, interpolated between the two samples about
@@ -522,6 +519,18 @@ def _impact_columns(t_imp, side_names, x_imp, y_imp, v_minus, v_plus, dv, flight
         "v_plus": v_plus, "dv": dv, "w_minus": w_minus, "w_plus": w_plus,
         "u_minus": w_minus - v_minus, "u_plus": w_plus - v_plus,
         "flight_in": f_in, "flight_out": f_out}
+
+
+def _first_samples(t: np.ndarray, ti: np.ndarray, fs: float) -> np.ndarray:
+    """Index of the first sample strictly after each impact (``ti`` from ``t[0]``).
+
+    A jump counts in the LO velocity from that sample on; ``t.size`` for an impact at
+    or after the last sample.
+    """
+    n = t.size
+    first = np.minimum(np.floor(ti * fs).astype(np.int64) + 1, n)
+    first += (first < n) & (first > 0) & ((t[np.clip(first - 1, 0, n - 1)] - t[0]) > ti)
+    return first
 
 
 def _first_where(cond, starts: np.ndarray, ends: np.ndarray, part: int = _PART) -> np.ndarray:
@@ -588,9 +597,8 @@ def _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f, acc, fs,
             if sel.size == 0:
                 continue
             thr = -mug if sgn < 0 else mug
-            lets_go = ((lambda lo, hi, thr=thr: acc[lo:hi] < thr) if sgn < 0 else
-                       (lambda lo, hi, thr=thr: acc[lo:hi] > thr))
-            first_go = _first_where(lets_go, cs[sel], ce[sel])
+            first_go = _first_where(lambda lo, hi, s=sgn: s * acc[lo:hi] > mug, cs[sel],
+                                    ce[sel])
             inside = first_go > 0
             kk = np.clip(np.where(first_go >= 0, first_go, t.size), 1, t.size - 1)
             a0, a1 = acc[kk - 1], acc[kk]

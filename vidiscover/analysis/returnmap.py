@@ -191,6 +191,11 @@ class FeatureContext:
             return self.ts, self.x
         return self.ts[ok], self.x[ok]
 
+    def amplitude(self) -> float:
+        """The largest |x| over the finite samples (NaN without any)."""
+        _, xf = self.finite_motion()
+        return max(float(xf.max()), -float(xf.min())) if xf.size else _NAN
+
     @functools.cached_property
     def _cycles(self) -> np.ndarray:
         c = self.forcing.cycle_starts(self.t_start, self.t_end)
@@ -346,27 +351,24 @@ def _cycle_amplitudes(ctx: FeatureContext) -> np.ndarray:
     c = ctx.cycles()
     if c.size < 2 or ctx.x.size == 0:
         return np.zeros(0)
-    ts, xf = ctx.finite_motion()
+    all_finite = ctx.finite_motion()[1] is ctx.x
     idx = np.searchsorted(ctx.ts, c)
     lo, hi = idx[:-1], idx[1:]
-    if xf is ctx.x:                                 # every sample finite: no copies
-        keep = hi > lo
-        if not keep.any():
-            return np.zeros(0)
-        lo = lo[keep]
-        end = int(hi[keep][-1])
-        return 0.5 * (np.maximum.reduceat(xf[:end], lo) - np.minimum.reduceat(xf[:end], lo))
-    ok = np.isfinite(ctx.x)
-    cnt = np.concatenate([[0], np.cumsum(ok)])
-    keep = (hi > lo) & (cnt[hi] > cnt[lo])          # cycles with a finite sample
+    keep = hi > lo
+    if not all_finite:
+        ok = np.isfinite(ctx.x)
+        cnt = np.concatenate([[0], np.cumsum(ok)])
+        keep &= cnt[hi] > cnt[lo]                   # cycles with a finite sample
     if not keep.any():
         return np.zeros(0)
     lo = lo[keep]
     end = int(hi[keep][-1])
     # each segment runs to the next kept start; cycles skipped in between hold no
-    # finite sample, and non-finite samples are neutral (-inf / +inf)
-    xmax = np.maximum.reduceat(np.where(ok, ctx.x, -np.inf)[:end], lo)
-    xmin = np.minimum.reduceat(np.where(ok, ctx.x, np.inf)[:end], lo)
+    # finite sample, and non-finite samples are neutral (-inf / +inf; no copy of a long
+    # record when every sample is finite)
+    x = ctx.x
+    xmax = np.maximum.reduceat((x if all_finite else np.where(ok, x, -np.inf))[:end], lo)
+    xmin = np.minimum.reduceat((x if all_finite else np.where(ok, x, np.inf))[:end], lo)
     return 0.5 * (xmax - xmin)
 
 
@@ -393,7 +395,7 @@ def _strobe(ctx: FeatureContext) -> float:
         return _NAN
     xs = np.interp(c, ts, xf)
     xs = xs[xs.size // 2:]
-    amp = max(float(xf.max()), -float(xf.min()))
+    amp = ctx.amplitude()
     best = _NAN
     for p in range(1, 5):
         if xs.size <= p:

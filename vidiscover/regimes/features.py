@@ -198,19 +198,13 @@ def cycle_waveforms(ctx: FeatureContext, points: int = _WAVE_POINTS) -> np.ndarr
     return np.interp(grid.ravel(), ts, xf).reshape(grid.shape)
 
 
-def _amp(ctx: FeatureContext) -> float:
-    """The largest |x| over the finite samples (without copying a long record)."""
-    _, xf = ctx.finite_motion()
-    return max(float(xf.max()), -float(xf.min())) if xf.size else _NAN
-
-
 def _waveform_errors(ctx: FeatureContext) -> list[float]:
     """Worst RMS change of the cycle waveform over p = 1..4 cycles.
 
     Over the last half of the record, relative to max |x|.
     """
     w = cycle_waveforms(ctx)
-    amp = _amp(ctx)
+    amp = ctx.amplitude()
     if w.shape[0] < 6 or not amp > 0:
         return []
     w = w[w.shape[0] // 2:]
@@ -254,7 +248,7 @@ def _strobe_disp(ctx: FeatureContext) -> float:
     1, larger for subharmonic, quasi-periodic or irregular motion.
     """
     w = cycle_waveforms(ctx)
-    amp = _amp(ctx)
+    amp = ctx.amplitude()
     if w.shape[0] < 2 or not amp > 0:
         return _NAN
     return float(w[:, 0].std() / amp)
