@@ -31,11 +31,11 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import os
-import pickle
 import platform
 import time
 
 import numpy as np
+from _case_cache import cached
 
 from vidiscover.analysis import analyze
 from vidiscover.corpus import N_CASES, realism_corpus
@@ -54,24 +54,12 @@ def analyses(case, cache: str | None = None) -> list:
     always evaluated by the code under test. Delete the directory when the simulation,
     the sensors or the analysis change.
     """
-    path = os.path.join(cache, f"{case.name}.pkl") if cache else None
-    if path and os.path.exists(path):
-        with open(path, "rb") as fh:
-            outs = pickle.load(fh)
-        if isinstance(outs, Exception):
-            raise outs
-        return outs
-    outs = []
-    for k, ratio in enumerate(RATIOS):
-        c = dataclasses.replace(case, b=case.b * ratio, seed=case.seed + k)
-        sim = c.simulate(label=False)
-        outs.append(analyze(sim.recording, n_boot=0))
-    if path:
-        os.makedirs(cache, exist_ok=True)
-        with open(path + ".tmp", "wb") as fh:
-            pickle.dump(outs, fh)
-        os.replace(path + ".tmp", path)
-    return outs
+    def compute():
+        return [analyze(dataclasses.replace(case, b=case.b * ratio, seed=case.seed + k)
+                        .simulate(label=False).recording, n_boot=0)
+                for k, ratio in enumerate(RATIOS)]
+
+    return cached(cache, case.name, compute)
 
 
 def score_case(case, cache: str | None = None) -> dict:

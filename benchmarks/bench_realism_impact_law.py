@@ -42,11 +42,11 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import os
-import pickle
 import platform
 import time
 
 import numpy as np
+from _case_cache import cached
 
 from vidiscover.analysis import analyze
 from vidiscover.corpus import N_CASES, realism_corpus
@@ -86,10 +86,11 @@ def case_tables(case, cache: str | None = None) -> dict:
     ``hc_truth`` the true impacts of the third (Hunt-Crossley walls; see
     :func:`score_hunt_crossley`). Tables are ``discover(...).impact_data``.
     """
-    path = os.path.join(cache, f"{case.name}.pkl") if cache else None
-    if path and os.path.exists(path):
-        with open(path, "rb") as fh:
-            return pickle.load(fh)
+    return cached(cache, case.name, lambda: _tables(case))
+
+
+def _tables(case) -> dict:
+    """:func:`case_tables` computed."""
     kinds = _kinds(case)
     rec = {"name": case.name, "kinds": kinds}
     if "kelvin-voigt" in kinds.values():
@@ -105,11 +106,6 @@ def case_tables(case, cache: str | None = None) -> dict:
         res = discover(pool, mu=case.mu, flight=False, n_boot=0, refine_mu=False)
         rec["hc"] = dict(res.impact_data)
         rec["hc_truth"] = {**_truth(runs[fastest][1].impacts), "b_pred": RATIOS[fastest]}
-    if path:
-        os.makedirs(cache, exist_ok=True)
-        with open(path + ".tmp", "wb") as fh:
-            pickle.dump(rec, fh)
-        os.replace(path + ".tmp", path)
     return rec
 
 
