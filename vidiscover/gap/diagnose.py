@@ -386,9 +386,9 @@ def _parsimonious(fits: list[CandidateFit]) -> list[CandidateFit]:
 #: also the number of pairs whose first effect is refitted on top of the second.
 PAIR_POOL = 3
 #: Pairs never fitted: nested effects (a law per wall contains constants per wall).
-_NO_PAIR = ({"asymmetric_restitution", "velocity_dependent_restitution"},)
-#: Effects that set the restitution per wall.
-_WALLS = ("asymmetric_restitution", "velocity_dependent_restitution")
+_NO_PAIR = tuple({rich, simple} for rich, simple in NESTED.items())
+#: Effects that set the restitution per wall (the nested pair).
+_WALLS = (*NESTED.values(), *NESTED)
 
 
 def _pair_step(item):
@@ -516,7 +516,7 @@ def _constant_laws(pair: CandidateFit) -> CandidateFit:
 
     Any other pair is returned unchanged.
     """
-    rich, simple = "velocity_dependent_restitution", "asymmetric_restitution"
+    [(rich, simple)] = NESTED.items()
     if rich not in pair.params:
         return pair
     laws = [str(pair.params[rich].get(side, "")).split(":") for side in ("right", "left")]
