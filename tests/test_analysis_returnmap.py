@@ -1,4 +1,4 @@
-"""Stage 4: first return map and the feature registry."""
+"""Stage 4: first return map and the feature sets."""
 
 import math
 
@@ -6,8 +6,9 @@ import numpy as np
 import pytest
 from analysis_sim import analysed
 
-from vidiscover.analysis import FEATURES, FeatureContext, Forcing, return_map
-from vidiscover.analysis.returnmap import ANALYSIS_FEATURES, compute_features, register_feature
+from vidiscover.analysis import FeatureContext, FeatureSet, Forcing, analyze, return_map
+from vidiscover.analysis.returnmap import ANALYSIS_FEATURES, compute_features
+from vidiscover.errors import InputError
 
 T = 0.125
 
@@ -68,14 +69,35 @@ def test_every_feature_is_a_float_in_every_case(case):
     t, side = {"none": ([], []), "one": ([1.0], ["left"]),
                "two": ([1.0, 1.05], ["left", "right"]), "regular": _two_asymmetric()}[case]
     f = compute_features(_ctx(t, side))
-    assert set(f) == set(FEATURES)
+    assert list(f) == list(ANALYSIS_FEATURES)
     assert all(isinstance(v, float) for v in f.values())
     assert f["n_impacts"] == len(t)
 
 
-def test_registry_rejects_duplicates():
-    with pytest.raises(ValueError, match="already registered"):
-        register_feature("n_impacts")(lambda ctx: 0.0)
+def test_feature_sets_combine_select_and_refuse_clashes():
+    extra = FeatureSet({"first": lambda ctx: float(ctx.t[0]) if ctx.t.size else math.nan})
+    both = ANALYSIS_FEATURES | extra
+    assert list(both) == [*ANALYSIS_FEATURES, "first"]
+    assert ANALYSIS_FEATURES | ANALYSIS_FEATURES == ANALYSIS_FEATURES   # same functions
+    with pytest.raises(ValueError, match="defined differently"):
+        ANALYSIS_FEATURES | {"n_impacts": lambda ctx: 0.0}
+    sel = both.select(["first", "n_impacts"])
+    t, side = _two_asymmetric()
+    assert compute_features(_ctx(t, side), sel) == {"first": t[0], "n_impacts": t.size}
+    with pytest.raises(KeyError, match="not in this set"):
+        ANALYSIS_FEATURES.select(["first"])
+    with pytest.raises(TypeError, match="not callable"):
+        FeatureSet({"x": 1.0})
+    assert "first" not in ANALYSIS_FEATURES        # combining changed neither set
+
+
+def test_analyze_computes_the_set_it_is_given_and_refuses_names():
+    out, _ = analysed(0.009)
+    rec = out.recording
+    sel = ANALYSIS_FEATURES.select(["alternation"])
+    assert list(analyze(rec, n_boot=0, features=sel).features) == ["alternation"]
+    with pytest.raises(InputError, match="FeatureSet"):
+        analyze(rec, n_boot=0, features=("alternation",))
 
 
 def test_simulated_paper_case_features():

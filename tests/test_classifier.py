@@ -9,8 +9,8 @@ from sklearn.utils.estimator_checks import parametrize_with_checks
 from threadpoolctl import threadpool_limits
 
 from vidiscover import Effects, preset
-from vidiscover.analysis import FEATURES, FeatureContext, Forcing, return_map
-from vidiscover.analysis.returnmap import compute_features
+from vidiscover.analysis import FeatureContext, Forcing, return_map
+from vidiscover.analysis.returnmap import ANALYSIS_FEATURES, compute_features
 from vidiscover.errors import InputError
 from vidiscover.regimes import LABELS
 from vidiscover.regimes.classifier import (
@@ -26,7 +26,7 @@ from vidiscover.regimes.classifier import (
     save_model,
 )
 from vidiscover.regimes.dataset import PARAM_RANGES, draw_cases, draw_realism_cases, generate
-from vidiscover.regimes.features import REGIME_FEATURES
+from vidiscover.regimes.features import ALL_FEATURES, REGIME_FEATURES
 from vidiscover.workflows import simulate_to_memory
 
 T = 0.125
@@ -56,8 +56,14 @@ def _locked(n_cycles=40, lag=0.03):
     return t, np.array(["right", "left"] * n_cycles)
 
 
-def test_regime_features_are_registered():
-    assert set(REGIME_FEATURES) <= set(FEATURES)
+def test_regime_features_are_an_explicit_set_importing_registers_nothing():
+    assert list(ALL_FEATURES) == [*ANALYSIS_FEATURES, *REGIME_FEATURES]
+    assert not set(REGIME_FEATURES) & set(ANALYSIS_FEATURES)
+    assert list(compute_features(_ctx(*_locked()))) == list(ANALYSIS_FEATURES)
+
+
+def _all(ctx):
+    return compute_features(ctx, ALL_FEATURES)
 
 
 @pytest.mark.parametrize("case", ["none", "one", "two", "regular", "random"])
@@ -67,15 +73,15 @@ def test_every_feature_is_a_float_in_every_case(case):
                "two": ([1.0, 1.05], ["left", "right"]), "regular": _locked(),
                "random": (np.sort(rng.uniform(0, 5.12, 60)),
                           rng.choice(["left", "right"], 60))}[case]
-    f = compute_features(_ctx(t, side))
-    assert set(f) == set(FEATURES)
+    f = _all(_ctx(t, side))
+    assert list(f) == list(ALL_FEATURES)
     assert all(isinstance(v, float) for v in f.values())
     if case in ("regular", "random"):
         assert all(math.isfinite(v) for v in f.values())
 
 
 def test_locked_two_impacts_per_cycle():
-    f = compute_features(_ctx(*_locked()))
+    f = _all(_ctx(*_locked()))
     assert f["phase_coherence"] == pytest.approx(1.0)
     assert f["one_per_cycle_share"] == 0.0 and f["multi_per_cycle_share"] == 0.0
     assert f["count_std"] == 0.0 and f["modal_count_share"] == 1.0
@@ -93,9 +99,9 @@ def test_locked_two_impacts_per_cycle():
 def test_random_impacts_are_not_locked():
     rng = np.random.default_rng(0)
     t = np.sort(rng.uniform(0, 5.12, 80))
-    f = compute_features(_ctx(t, rng.choice(["left", "right"], 80)))
+    f = _all(_ctx(t, rng.choice(["left", "right"], 80)))
     assert f["phase_coherence"] < 0.4
-    assert f["returnmap_cluster_density"] > 0.5 > compute_features(
+    assert f["returnmap_cluster_density"] > 0.5 > _all(
         _ctx(*_locked()))["returnmap_cluster_density"]
 
 
@@ -103,13 +109,13 @@ def test_bursts_and_modulation():
     # impacts in 5 cycles out of 10, an envelope modulated at 0.8 Hz, period-2 waveform
     cyc = np.arange(40)
     t = (cyc[(cyc // 5) % 2 == 0] * T + 0.02)
-    f = compute_features(_ctx(t, np.array(["right"] * t.size), x=lambda s: (
+    f = _all(_ctx(t, np.array(["right"] * t.size), x=lambda s: (
         0.005 * (1 + 0.5 * np.sin(2 * np.pi * 0.8 * s)) * np.sin(2 * np.pi * 8 * s))))
     assert f["quiet_run"] == pytest.approx(5 / 40)
     assert f["side_run"] == pytest.approx(t.size / 40, rel=0.05)    # 20 impacts, 40 cycles
     assert f["envelope_cv"] > 0.2 and f["strobe_dispersion"] < 1e-9
     assert f["waveform_period"] == 0.0            # not periodic within 4 cycles
-    sub = compute_features(_ctx(*_locked(), x=lambda s: 0.005 * np.sin(2 * np.pi * 8 * s)
+    sub = _all(_ctx(*_locked(), x=lambda s: 0.005 * np.sin(2 * np.pi * 8 * s)
                                 + 0.002 * np.cos(2 * np.pi * 4 * s)))
     assert sub["waveform_period"] == 2.0 and sub["strobe_dispersion"] > 0.1
 
@@ -252,7 +258,8 @@ def test_features_are_the_same_for_a_rig_at_another_scale():
         rec, truth, _ = simulate_to_memory(q, fx, sensors=sen, seed=3, settle=20 * time,
                                            duration=5.12 * time)
         out = analyze(rec, n_boot=0, pulse=known_pulse(sen, fx))
-        return truth.label, compute_features(feature_context(out), model_features())
+        return truth.label, compute_features(feature_context(out),
+                                             ALL_FEATURES.select(model_features()))
 
     for b, r, tol in ((0.012, "0.7,0.7", 1e-3), (0.009, "0.8,0.8", 5e-3),
                       (0.006, "0.8782,0.2018", 1e-3)):

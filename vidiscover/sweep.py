@@ -323,7 +323,7 @@ def sweep(param: str, values: Sequence[float], *, base: SystemParams | None = No
         ``value``, ``seed``, ``label`` (ground truth), ``label_pred``,
         ``n_impacts_true``, ``ipc_true``, ``phi_true``, ``periodic_true``,
         ``period_true`` (-1: none), ``r_rms_right``/``left`` and ``r_n_right``/``left``
-        (estimated from the sensor data), ``sim_status``, every registered feature
+        (estimated from the sensor data), ``sim_status``, every feature of ``ALL_FEATURES``
         (detected ``n_impacts``, ``impacts_per_cycle``...), and ``dt_T`` (list of
         detected impact time differences over the forcing period).
         ``df.attrs["sweep"]`` holds the spec.

@@ -5,7 +5,7 @@
 * :mod:`.friction` -- ball flights with or without Coulomb friction (eqs. 6, 8);
 * :mod:`.reconstruction` -- stage 2, LO velocity, ball position, flight segments;
 * :mod:`.restitution` -- stage 3, r per impact (eq. 9), per wall, mu table;
-* :mod:`.returnmap` -- stage 4, first return map and the feature registry;
+* :mod:`.returnmap` -- stage 4, first return map and the feature sets;
 * :mod:`.pipeline` -- :func:`analyze`, stages 1-4 in one call;
 * :mod:`.validation` -- comparison with simulated ground truth (the single
   detectability criterion).
@@ -17,11 +17,11 @@ from .pipeline import AnalysisResult, analyze
 from .reconstruction import FLIGHT_COLUMNS, Reconstruction, reconstruct
 from .restitution import MU_TABLE, RestitutionEstimate, WallStats, estimate_restitution, mu_table
 from .returnmap import (
-                          FEATURES,
+                          ANALYSIS_FEATURES,
                           FeatureContext,
+                          FeatureSet,
                           ReturnMap,
                           compute_features,
-                          register_feature,
                           return_map,
 )
 from .signals import Forcing, fit_forcing
@@ -36,12 +36,13 @@ from .validation import (
 )
 
 __all__ = [
-    "AnalysisResult", "DETECTABLE_SNR", "DetectionScores", "FEATURES", "FLIGHT_COLUMNS",
-    "FeatureContext", "Forcing", "IMPACT_COLUMNS", "ImpactDetection", "MU_TABLE",
+    "ANALYSIS_FEATURES", "AnalysisResult", "DETECTABLE_SNR", "DetectionScores",
+    "FLIGHT_COLUMNS", "FeatureContext", "FeatureSet", "Forcing", "IMPACT_COLUMNS",
+    "ImpactDetection", "MU_TABLE",
     "PulseModel", "Reconstruction", "RestitutionEstimate", "ReturnMap", "WallStats",
     "analyze", "compute_features", "contact_dv", "detect_impacts", "detectable",
     "detectable_truth",
     "detection_scores", "eq8_velocities", "estimate_restitution", "fit_forcing",
-    "integrate_flights", "match_impacts", "mu_table", "reconstruct", "register_feature",
+    "integrate_flights", "match_impacts", "mu_table", "reconstruct",
     "return_map", "solve_flights",
 ]

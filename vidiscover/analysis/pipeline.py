@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -24,7 +25,7 @@ from .impacts import ImpactDetection, detect_impacts
 from .pulse import PulseModel, PulseResponse
 from .reconstruction import Reconstruction, reconstruct
 from .restitution import MU_TABLE, RestitutionEstimate, estimate_restitution, mu_table
-from .returnmap import ANALYSIS_FEATURES, FeatureContext, ReturnMap, compute_features, return_map
+from .returnmap import FeatureContext, ReturnMap, compute_features, return_map
 from .signals import Forcing, Offsets, estimate_offsets, fit_forcing
 
 __all__ = ["AnalysisResult", "analyze"]
@@ -53,7 +54,8 @@ class AnalysisResult:
     returnmap : ReturnMap
         Stage 4.
     features : dict
-        Registered features (:data:`vidiscover.analysis.returnmap.FEATURES`).
+        The features computed (name -> value), those of the set given to
+        :func:`analyze` (default :data:`~vidiscover.analysis.returnmap.ANALYSIS_FEATURES`).
     regime_label : str or None
         Regime label (None until a classifier is attached).
     warnings : tuple of str
@@ -196,10 +198,11 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 
         Estimate the accelerometer bias and the displacement zero offsets over whole
         forcing cycles and remove them before stages 2-4
         (:func:`vidiscover.analysis.signals.estimate_offsets`).
-    features : sequence of str, optional
-        Names of the registered features to compute (default: the analysis's own,
-        :data:`~vidiscover.analysis.returnmap.ANALYSIS_FEATURES`; the classifier's
-        full set is ``vidiscover.regimes.features.ALL_FEATURES``).
+    features : FeatureSet, optional
+        The features to compute (:class:`~vidiscover.analysis.returnmap.FeatureSet`;
+        default the analysis's own,
+        :data:`~vidiscover.analysis.returnmap.ANALYSIS_FEATURES`; the regime
+        classifier needs ``vidiscover.regimes.features.ALL_FEATURES``).
 
     Returns
     -------
@@ -211,6 +214,10 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 
         On unusable input (too short, bad time axis, no finite acceleration or
         displacement, impossible parameters).
     """
+    if features is not None and not isinstance(features, Mapping):
+        raise InputError("features must be a FeatureSet (name -> function), e.g. "
+                         "vidiscover.regimes.features.ALL_FEATURES or ANALYSIS_FEATURES."
+                         f"select([...]); got {type(features).__name__}")
     theta_deg = 0.0
     if flight_law is not None:
         mu, theta_deg = _law_mu_theta(flight_law)
@@ -233,7 +240,7 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 
     ctx = FeatureContext(t=det.t, side=det.side, dv=det.dv, t_start=float(rec.t[0]),
                          t_end=float(rec.t[-1]) + 1.0 / det.sample_rate, forcing=forcing,
                          ts=recon.t, x=recon.x, returnmap=rm)
-    features = compute_features(ctx, ANALYSIS_FEATURES if features is None else features)
+    features = compute_features(ctx, features)
     warnings = list(det.warnings)
     if forcing.source != "xe":
         warnings.append("base displacement 'xe' has no usable sine: cycles are cut with the "

@@ -5,10 +5,11 @@ differences ``(dt_i, dt_{i+1})`` with ``dt_i = t_{i+1} - t_i``: a periodic regim
 is a few points (two asymmetric impacts per cycle: two points mirrored about the
 diagonal), a quasi-periodic one a closed curve, an irregular one a cloud.
 
-Features are registered in :data:`FEATURES` (name -> function of a
-:class:`FeatureContext`), so the classifier and the tests iterate over one
-registry; add one with :func:`register_feature`. Every feature returns a float;
-NaN means "undefined for this record" (e.g. no impacts).
+Features come in explicit sets (:class:`FeatureSet`, name -> function of a
+:class:`FeatureContext`): the analysis's own is :data:`ANALYSIS_FEATURES`; a set is
+passed to :func:`compute_features` and :func:`~vidiscover.analysis.analyze` as a value,
+and extended with ``|``. Every feature returns a float; NaN means "undefined for this
+record" (e.g. no impacts).
 
 Examples
 --------
@@ -22,7 +23,7 @@ from __future__ import annotations
 
 import functools
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -30,8 +31,7 @@ import pandas as pd
 
 from .signals import Forcing
 
-__all__ = ["ReturnMap", "return_map", "FeatureContext", "FEATURES", "ANALYSIS_FEATURES",
-           "register_feature",
+__all__ = ["ReturnMap", "return_map", "FeatureContext", "FeatureSet", "ANALYSIS_FEATURES",
            "compute_features"]
 
 
@@ -216,57 +216,110 @@ class FeatureContext:
         return out
 
 
-#: Feature registry: name -> function(FeatureContext) -> float.
-FEATURES: dict[str, Callable[[FeatureContext], float]] = {}
+class FeatureSet(Mapping):
+    """An explicit, ordered, immutable set of named features.
+
+    Maps a feature's name to its function of a :class:`FeatureContext` (returning a
+    float, NaN when undefined). A set is passed to :func:`compute_features` and
+    :func:`~vidiscover.analysis.analyze` as a value; nothing is registered globally,
+    so what a process computes never depends on which modules it imported.
+
+    Sets combine with ``|`` (a name may appear in both only with the same function)
+    and :meth:`select` keeps some of the names.
+
+    Examples
+    --------
+    >>> extra = FeatureSet({"first_impact": lambda ctx: float(ctx.t[0])})
+    >>> mine = ANALYSIS_FEATURES | extra
+    >>> list(mine)[-1], len(mine) == len(ANALYSIS_FEATURES) + 1
+    ('first_impact', True)
+    """
+
+    __slots__ = ("_funcs",)
+
+    def __init__(self, features: Mapping[str, Callable[[FeatureContext], float]]
+                 | Iterable[tuple[str, Callable[[FeatureContext], float]]] = ()):
+        funcs = dict(features)
+        for name, func in funcs.items():
+            if not isinstance(name, str) or not name:
+                raise TypeError(f"feature names are non-empty strings, got {name!r}")
+            if not callable(func):
+                raise TypeError(f"feature {name!r} is not callable: {func!r}")
+        self._funcs = funcs
+
+    def __getitem__(self, name: str) -> Callable[[FeatureContext], float]:
+        return self._funcs[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._funcs)
+
+    def __len__(self) -> int:
+        return len(self._funcs)
+
+    def __repr__(self) -> str:
+        return f"FeatureSet({', '.join(self._funcs)})"
+
+    def __or__(self, other: Mapping) -> FeatureSet:
+        other = other if isinstance(other, FeatureSet) else FeatureSet(other)
+        clash = [n for n in other if n in self and other[n] is not self[n]]
+        if clash:
+            raise ValueError(f"features {clash} are defined differently in the two sets; "
+                             "rename one of them")
+        return FeatureSet({**self._funcs, **other._funcs})
+
+    def select(self, names: Iterable[str]) -> FeatureSet:
+        """The features ``names`` of this set, in the order given."""
+        names = list(names)
+        missing = [n for n in names if n not in self._funcs]
+        if missing:
+            raise KeyError(f"features {missing} are not in this set; it has: "
+                           f"{', '.join(self._funcs)}")
+        return FeatureSet({n: self._funcs[n] for n in names})
 
 
-def register_feature(name: str):
-    """Decorator adding a feature function to :data:`FEATURES` under ``name``."""
-    def deco(func: Callable[[FeatureContext], float]):
-        if name in FEATURES:
-            raise ValueError(f"feature {name!r} is already registered")
-        FEATURES[name] = func
-        return func
-    return deco
+def compute_features(ctx: FeatureContext, features: Mapping | None = None
+                     ) -> dict[str, float]:
+    """Evaluate a feature set on ``ctx`` (default :data:`ANALYSIS_FEATURES`).
 
-
-def compute_features(ctx: FeatureContext, names=None) -> dict[str, float]:
-    """Evaluate the registered features (all, or ``names``) on ``ctx``."""
-    names = list(FEATURES) if names is None else list(names)
-    return {n: float(FEATURES[n](ctx)) for n in names}
+    Returns
+    -------
+    dict
+        Name -> float, in the set's order.
+    """
+    features = ANALYSIS_FEATURES if features is None else features
+    if not isinstance(features, Mapping):
+        raise TypeError("features is a FeatureSet (name -> function), e.g. "
+                        "ANALYSIS_FEATURES.select([...]); got "
+                        f"{type(features).__name__}")
+    return {n: float(f(ctx)) for n, f in features.items()}
 
 
 _NAN = float("nan")
 
 
-@register_feature("n_impacts")
 def _n_impacts(ctx: FeatureContext) -> float:
     """Number of detected impacts."""
     return float(ctx.t.size)
 
 
-@register_feature("impacts_per_cycle")
 def _ipc(ctx: FeatureContext) -> float:
     """Mean impacts per complete forcing cycle."""
     c = ctx.counts()
     return float(c.mean()) if c.size else _NAN
 
 
-@register_feature("impacting_cycle_share")
 def _phi(ctx: FeatureContext) -> float:
     """Share of complete cycles with at least one impact."""
     c = ctx.counts()
     return float((c >= 1).mean()) if c.size else _NAN
 
 
-@register_feature("two_per_cycle_share")
 def _share2(ctx: FeatureContext) -> float:
     """Share of complete cycles with exactly two impacts."""
     c = ctx.counts()
     return float((c == 2).mean()) if c.size else _NAN
 
 
-@register_feature("alternation")
 def _alternation(ctx: FeatureContext) -> float:
     """Share of consecutive impacts on opposite walls (paper eq. 5)."""
     if ctx.t.size < 2:
@@ -274,7 +327,6 @@ def _alternation(ctx: FeatureContext) -> float:
     return float((ctx.side[1:] != ctx.side[:-1]).mean())
 
 
-@register_feature("chatter_share")
 def _chatter(ctx: FeatureContext) -> float:
     """Share of impacts on the same wall as the previous one."""
     if ctx.t.size < 2:
@@ -282,13 +334,11 @@ def _chatter(ctx: FeatureContext) -> float:
     return float((ctx.side[1:] == ctx.side[:-1]).sum() / ctx.t.size)
 
 
-@register_feature("right_share")
 def _right_share(ctx: FeatureContext) -> float:
     """Share of impacts on the right wall."""
     return float((ctx.side == "right").mean()) if ctx.t.size else _NAN
 
 
-@register_feature("asymmetry")
 def _asym(ctx: FeatureContext) -> float:
     """|mean dt after a right impact - mean dt after a left impact| / T (alternating pairs)."""
     if ctx.t.size < 3:
@@ -302,14 +352,12 @@ def _asym(ctx: FeatureContext) -> float:
     return float(abs(ar.mean() - al.mean()) / ctx.period)
 
 
-@register_feature("dt_cv")
 def _dt_cv(ctx: FeatureContext) -> float:
     """Coefficient of variation of the impact time differences."""
     dt = ctx.returnmap.dt
     return float(dt.std() / dt.mean()) if dt.size >= 2 and dt.mean() > 0 else _NAN
 
 
-@register_feature("returnmap_clusters")
 def _clusters(ctx: FeatureContext) -> float:
     """Clusters of the return map holding at least 5 % of its points."""
     rm = ctx.returnmap
@@ -319,7 +367,6 @@ def _clusters(ctx: FeatureContext) -> float:
     return float((counts >= max(1, 0.05 * rm.n_points)).sum())
 
 
-@register_feature("returnmap_spread")
 def _spread(ctx: FeatureContext) -> float:
     """RMS distance of return-map points to their cluster centre, in periods."""
     rm = ctx.returnmap
@@ -330,7 +377,6 @@ def _spread(ctx: FeatureContext) -> float:
     return float(np.sqrt(np.mean(d ** 2)) / rm.period)
 
 
-@register_feature("diagonal_distance")
 def _diag(ctx: FeatureContext) -> float:
     """Mean distance of return-map points to the diagonal, in periods."""
     rm = ctx.returnmap
@@ -339,7 +385,6 @@ def _diag(ctx: FeatureContext) -> float:
     return float(np.mean(np.abs(rm.y - rm.x)) / math.sqrt(2) / rm.period)
 
 
-@register_feature("dv_cv")
 def _dv_cv(ctx: FeatureContext) -> float:
     """Coefficient of variation of the impact strengths |dv|."""
     a = np.abs(ctx.dv)
@@ -372,7 +417,6 @@ def _cycle_amplitudes(ctx: FeatureContext) -> np.ndarray:
     return 0.5 * (xmax - xmin)
 
 
-@register_feature("envelope_modulation")
 def _modulation(ctx: FeatureContext) -> float:
     """(P95 - P5) / (P95 + P5) of the per-cycle LO half peak-to-peak (label index M)."""
     amp = _cycle_amplitudes(ctx)
@@ -382,7 +426,6 @@ def _modulation(ctx: FeatureContext) -> float:
     return float((p95 - p5) / (p95 + p5)) if p95 + p5 > 0 else _NAN
 
 
-@register_feature("strobe_period_error")
 def _strobe(ctx: FeatureContext) -> float:
     """Periodicity error of the stroboscopic LO displacement (~0 when periodic).
 
@@ -405,6 +448,23 @@ def _strobe(ctx: FeatureContext) -> float:
     return best
 
 
-#: The features the analysis itself defines (registered above), in registration order:
-#: what :func:`vidiscover.analysis.analyze` computes unless given another set.
-ANALYSIS_FEATURES: tuple[str, ...] = tuple(FEATURES)
+#: The features the analysis itself defines: what :func:`vidiscover.analysis.analyze`
+#: computes unless given another set (the regime classifier's set is
+#: ``vidiscover.regimes.features.ALL_FEATURES``, which includes these).
+ANALYSIS_FEATURES = FeatureSet({
+    "n_impacts": _n_impacts,
+    "impacts_per_cycle": _ipc,
+    "impacting_cycle_share": _phi,
+    "two_per_cycle_share": _share2,
+    "alternation": _alternation,
+    "chatter_share": _chatter,
+    "right_share": _right_share,
+    "asymmetry": _asym,
+    "dt_cv": _dt_cv,
+    "returnmap_clusters": _clusters,
+    "returnmap_spread": _spread,
+    "diagonal_distance": _diag,
+    "dv_cv": _dv_cv,
+    "envelope_modulation": _modulation,
+    "strobe_period_error": _strobe,
+})

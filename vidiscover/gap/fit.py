@@ -143,13 +143,14 @@ def record_model(model: Model, result, noise_seed: int, *, learn: bool = False):
     Returns (recording, analysis); with ``learn`` the analysis learns the pulse
     response instead of being given it.
     """
-    from ..analysis import analyze
+    from ..analysis import ANALYSIS_FEATURES, analyze
     from ..workflows import record_simulation
 
     cfg = sensor_config(model)
     rec = record_simulation(result, cfg, seed=1000 + noise_seed, label=False).recording
     pulse = None if learn else _pulse_of(cfg, result.effects)
-    return rec, analyze(rec, n_boot=0, pulse=pulse, features=("envelope_modulation",))
+    return rec, analyze(rec, n_boot=0, pulse=pulse,
+                        features=ANALYSIS_FEATURES.select(["envelope_modulation"]))
 
 
 def _record(model: Model, result, noise_seed: int) -> Signature:

@@ -77,10 +77,8 @@ TRUSTED_TYPES: tuple[str, ...] = (
 def model_features() -> list[str]:
     """Names of the features the model uses: the analysis's and the regime features.
 
-    Taken from the explicit set :data:`vidiscover.regimes.features.ALL_FEATURES`, not
-    from whatever happens to be registered in the calling process (a training run
-    whose cases were analysed in worker processes once fitted on the analysis's
-    features alone).
+    Taken from the explicit set :data:`vidiscover.regimes.features.ALL_FEATURES`, the
+    set every training and classifying analysis computes.
     """
     from .features import ALL_FEATURES
 
@@ -248,7 +246,7 @@ class RuleBaseline:
         "asymmetry")
 
     def predict(self, features: pd.DataFrame) -> np.ndarray:
-        """Label every row of a DataFrame of features (columns named as registered)."""
+        """Label every row of a DataFrame of features (columns named as in ALL_FEATURES)."""
         f = {k: features[k].to_numpy(float) for k in self.FEATURES}
         with np.errstate(invalid="ignore"):
             ipc = np.nan_to_num(f["impacts_per_cycle"])
@@ -419,10 +417,23 @@ class RegimeModel:
         return out
 
     def classify_analysis(self, analysis, file: str | None = None) -> Classification:
-        """Label an :class:`~vidiscover.analysis.AnalysisResult`."""
-        from .dataset import analysis_features
+        """Label an :class:`~vidiscover.analysis.AnalysisResult`.
 
-        feats = analysis_features(analysis, self.feature_names)
+        The analysis must carry the model's features: make it with
+        ``analyze(rec, features=vidiscover.regimes.features.ALL_FEATURES)``.
+
+        Raises
+        ------
+        InputError
+            If the analysis lacks some of the model's features.
+        """
+        feats = dict(analysis.features)
+        missing = [n for n in self.feature_names if n not in feats]
+        if missing:
+            raise InputError(
+                f"analysis of {file or analysis.name!r} lacks {len(missing)} of the model's "
+                f"features ({', '.join(missing[:3])}{', ...' if len(missing) > 3 else ''}); "
+                "analyze it with features=vidiscover.regimes.features.ALL_FEATURES")
         proba = self.predict_proba([feats]).iloc[0]
         # the classifier's label from these probabilities (its predict(), without
         # evaluating the trees a second time): the first maximum in its class order
@@ -441,8 +452,10 @@ class RegimeModel:
     def classify(self, rec, file: str | None = None) -> Classification:
         """Analyse (stages 1-4) and label a :class:`~vidiscover.recording.Recording`."""
         from ..analysis import analyze
+        from .features import ALL_FEATURES
 
-        return self.classify_analysis(analyze(rec, n_boot=0), file=file or rec.name)
+        return self.classify_analysis(analyze(rec, n_boot=0, features=ALL_FEATURES),
+                                      file=file or rec.name)
 
     def __call__(self, analysis) -> dict:
         """``{label, proba}`` of an analysis (the ``classify`` hook of sweeps)."""

@@ -4,8 +4,9 @@ A case is a seeded random draw of a realistic rig (:data:`PARAM_RANGES`): cleara
 base amplitude and frequency, mass ratio, restitution per wall, friction,
 inclination, sensor noise and sheet resonance. Each case is simulated exactly (short
 settle, a 5.12 s record), recorded through the sensor model, analysed (stages 1-4,
-a small bootstrap) and turned into one row: the registered features computed from
-the recording alone, the ground-truth label of the simulated state
+a small bootstrap) and turned into one row: the features of
+:data:`~vidiscover.regimes.features.ALL_FEATURES` computed from the recording alone,
+the ground-truth label of the simulated state
 (:func:`vidiscover.regimes.labels.label_simulation`) and the drawn parameters.
 
 Other rigs, contact models and instrument chains (:func:`draw_realism_cases`) are
@@ -36,7 +37,7 @@ from ..errors import InputError
 from .labels import LABELS
 
 __all__ = ["PARAM_RANGES", "Case", "draw_cases", "draw_realism_cases", "simulate_case",
-           "generate", "feature_context", "analysis_features", "M1"]
+           "generate", "feature_context", "M1"]
 
 #: LO mass of every drawn rig (kg, the paper's); the ball mass follows the mass ratio.
 M1 = 4.168
@@ -276,8 +277,8 @@ def feature_context(analysis):
     """Rebuild the feature context of an analysis.
 
     Returns the :class:`~vidiscover.analysis.returnmap.FeatureContext` of an
-    :class:`~vidiscover.analysis.AnalysisResult`, to compute features registered
-    after it was made.
+    :class:`~vidiscover.analysis.AnalysisResult`, to compute another feature set on
+    it (``compute_features(feature_context(analysis), features)``).
     """
     from ..analysis.returnmap import FeatureContext
 
@@ -288,23 +289,6 @@ def feature_context(analysis):
                           x=analysis.reconstruction.x, returnmap=analysis.returnmap)
 
 
-def analysis_features(analysis, names=None) -> dict:
-    """The analysis's features plus those of ``names`` it lacks, computed from it.
-
-    ``names`` defaults to every feature a regime model may use
-    (:data:`~vidiscover.regimes.features.ALL_FEATURES`); the regime features are
-    registered after the analysis stage, so an analysis may not carry them.
-    """
-    from ..analysis.returnmap import compute_features
-    from .features import ALL_FEATURES
-
-    feats = dict(analysis.features)
-    missing = [n for n in (ALL_FEATURES if names is None else names) if n not in feats]
-    if missing:
-        feats.update(compute_features(feature_context(analysis), missing))
-    return feats
-
-
 def simulate_case(case: Case) -> dict:
     """Simulate, record, label and analyse one case; return its row.
 
@@ -313,10 +297,12 @@ def simulate_case(case: Case) -> dict:
     dict
         ``label`` (ground truth), ``truth_*`` (the quantities behind it), the drawn
         parameters, ``status`` ("ok" or the reason the case was dropped) and
-        ``feature:NAME`` for every registered feature.
+        ``feature:NAME`` for every feature of
+        :data:`~vidiscover.regimes.features.ALL_FEATURES`.
     """
     from ..analysis import analyze
     from ..workflows import known_pulse, simulate_to_memory
+    from .features import ALL_FEATURES
 
     row = {f"param:{k}": v for k, v in case.to_dict().items()}
     try:
@@ -328,11 +314,11 @@ def simulate_case(case: Case) -> dict:
         pulse = known_pulse(sensors, case.effects()) if not case.contact else None
         if pulse is None:
             pulse = _training_pulse(sensors, truth)
-        out = analyze(rec, n_boot=_N_BOOT, seed=case.seed, pulse=pulse)
+        out = analyze(rec, n_boot=_N_BOOT, seed=case.seed, pulse=pulse, features=ALL_FEATURES)
     except InputError as err:
         row.update(label=None, status=f"error: {err}")
         return row
-    feats = analysis_features(out)
+    feats = out.features
     row.update(label=truth.label, status="ok" if res.status == 0 else f"sim: {res.message}")
     row.update({f"truth:{k}": v for k, v in truth.regime.items() if k != "label"})
     row.update({f"feature:{k}": v for k, v in feats.items()})
@@ -442,14 +428,15 @@ def recording_row(rec, label: str | None, name: str = "") -> dict:
         every feature of :data:`~vidiscover.regimes.features.ALL_FEATURES`.
     """
     from ..analysis import analyze
+    from .features import ALL_FEATURES
 
     row = {"name": name or rec.name, "label": label}
     try:
-        out = analyze(rec, n_boot=0)
+        out = analyze(rec, n_boot=0, features=ALL_FEATURES)
     except InputError as err:
         row.update(status=f"error: {err}")
         return row
-    feats = analysis_features(out)
+    feats = out.features
     row.update(status="ok", **{f"feature:{k}": v for k, v in feats.items()})
     return row
 

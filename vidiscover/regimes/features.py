@@ -1,9 +1,10 @@
-"""More regime features, added to the registry of :mod:`vidiscover.analysis.returnmap`.
+"""The regime features: an explicit feature set beside the analysis's own.
 
-Importing this module registers the features below with
-:func:`~vidiscover.analysis.returnmap.register_feature`, so
-:func:`~vidiscover.analysis.analyze` computes them and the registry-wide tests cover
-them. Like the stage-4 features they see only the recording (detected impacts, the
+:data:`REGIME_FEATURES` is a :class:`~vidiscover.analysis.returnmap.FeatureSet`;
+:data:`ALL_FEATURES` adds it to the analysis's
+(:data:`~vidiscover.analysis.returnmap.ANALYSIS_FEATURES`), and is what the classifier
+needs: ``analyze(rec, features=ALL_FEATURES)``. Importing this module registers
+nothing. Like the stage-4 features they see only the recording (detected impacts, the
 LO displacement and the fitted forcing), never the simulated truth; each returns a
 float, NaN when undefined for the record.
 
@@ -21,10 +22,9 @@ float, NaN when undefined for the record.
 
 Examples
 --------
->>> import vidiscover.regimes.features as rf
->>> from vidiscover.analysis import FEATURES
->>> set(rf.REGIME_FEATURES) <= set(FEATURES)
-True
+>>> from vidiscover.regimes.features import ALL_FEATURES, REGIME_FEATURES
+>>> len(REGIME_FEATURES), set(REGIME_FEATURES) < set(ALL_FEATURES)
+(16, True)
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ import math
 
 import numpy as np
 
-from ..analysis.returnmap import ANALYSIS_FEATURES, FEATURES, FeatureContext, register_feature
+from ..analysis.returnmap import ANALYSIS_FEATURES, FeatureContext, FeatureSet
 
 __all__ = ["REGIME_FEATURES", "ALL_FEATURES", "cycle_waveforms"]
 
@@ -44,48 +44,34 @@ _WAVE_POINTS = 64
 PERIODIC_TOL = 0.02
 
 
-def _register(name: str):
-    """Register once (re-importing the module, e.g. by doctest, keeps the first)."""
-    def deco(func):
-        if name not in FEATURES:
-            register_feature(name)(func)
-        return func
-    return deco
-
-
 def _counts(ctx: FeatureContext) -> np.ndarray:
     return ctx.counts()
 
 
-@_register("one_per_cycle_share")
 def _share1(ctx: FeatureContext) -> float:
     """Share of complete cycles with exactly one impact."""
     c = _counts(ctx)
     return float((c == 1).mean()) if c.size else _NAN
 
 
-@_register("multi_per_cycle_share")
 def _share3(ctx: FeatureContext) -> float:
     """Share of complete cycles with three or more impacts."""
     c = _counts(ctx)
     return float((c >= 3).mean()) if c.size else _NAN
 
 
-@_register("count_std")
 def _count_std(ctx: FeatureContext) -> float:
     """Standard deviation of the impacts per cycle."""
     c = _counts(ctx)
     return float(c.std()) if c.size else _NAN
 
 
-@_register("modal_count_share")
 def _modal(ctx: FeatureContext) -> float:
     """Share of cycles with the most common number of impacts."""
     c = _counts(ctx)
     return float(np.bincount(c).max() / c.size) if c.size else _NAN
 
 
-@_register("quiet_run")
 def _quiet_run(ctx: FeatureContext) -> float:
     """Longest run of consecutive impact-free cycles, as a share of the cycles."""
     c = _counts(ctx)
@@ -98,7 +84,6 @@ def _quiet_run(ctx: FeatureContext) -> float:
     return float(best / c.size)
 
 
-@_register("phase_coherence")
 def _phase(ctx: FeatureContext) -> float:
     """Locking of the impacts to the forcing phase.
 
@@ -116,21 +101,18 @@ def _phase(ctx: FeatureContext) -> float:
     return float(total / ctx.t.size)
 
 
-@_register("dt_max")
 def _dt_max(ctx: FeatureContext) -> float:
     """Longest time between consecutive impacts, in forcing periods."""
     dt = ctx.returnmap.dt
     return float(dt.max() / ctx.period) if dt.size else _NAN
 
 
-@_register("dt_min")
 def _dt_min(ctx: FeatureContext) -> float:
     """Shortest time between consecutive impacts, in forcing periods."""
     dt = ctx.returnmap.dt
     return float(dt.min() / ctx.period) if dt.size else _NAN
 
 
-@_register("side_run")
 def _side_run(ctx: FeatureContext) -> float:
     """Longest run of consecutive impacts on the same wall, per forcing cycle.
 
@@ -148,7 +130,6 @@ def _side_run(ctx: FeatureContext) -> float:
     return float(best / n_cycles)
 
 
-@_register("returnmap_top_share")
 def _top_share(ctx: FeatureContext) -> float:
     """Share of the return-map points in its four largest clusters."""
     rm = ctx.returnmap
@@ -158,14 +139,12 @@ def _top_share(ctx: FeatureContext) -> float:
     return float(counts[:4].sum() / rm.n_points)
 
 
-@_register("returnmap_cluster_density")
 def _density(ctx: FeatureContext) -> float:
     """Number of return-map clusters per point (1 for a cloud, ~0 for a few points)."""
     rm = ctx.returnmap
     return float(rm.n_clusters / rm.n_points) if rm.n_points else _NAN
 
 
-@_register("dv_side_ratio")
 def _dv_ratio(ctx: FeatureContext) -> float:
     """|log(mean |dv| right / mean |dv| left)|: how differently the walls push the LO."""
     a = np.abs(ctx.dv)
@@ -217,7 +196,6 @@ def _waveform_errors(ctx: FeatureContext) -> list[float]:
     return out
 
 
-@_register("waveform_period_error")
 def _wave_err(ctx: FeatureContext) -> float:
     """How far the LO response is from periodic (~0 when periodic).
 
@@ -228,7 +206,6 @@ def _wave_err(ctx: FeatureContext) -> float:
     return float(min(e)) if e else _NAN
 
 
-@_register("waveform_period")
 def _wave_period(ctx: FeatureContext) -> float:
     """Smallest p <= 4 with ``waveform_period_error`` below 2 %, 0 if none."""
     e = _waveform_errors(ctx)
@@ -240,7 +217,6 @@ def _wave_period(ctx: FeatureContext) -> float:
     return 0.0
 
 
-@_register("strobe_dispersion")
 def _strobe_disp(ctx: FeatureContext) -> float:
     """Spread of the stroboscopic section of the LO displacement.
 
@@ -254,7 +230,6 @@ def _strobe_disp(ctx: FeatureContext) -> float:
     return float(w[:, 0].std() / amp)
 
 
-@_register("envelope_cv")
 def _env_cv(ctx: FeatureContext) -> float:
     """Coefficient of variation of the per-cycle LO half peak-to-peak."""
     w = cycle_waveforms(ctx)
@@ -264,13 +239,26 @@ def _env_cv(ctx: FeatureContext) -> float:
     return float(a.std() / a.mean()) if a.mean() > 0 else _NAN
 
 
-#: Names of the features this module adds.
-REGIME_FEATURES: tuple[str, ...] = (
-    "one_per_cycle_share", "multi_per_cycle_share", "count_std", "modal_count_share",
-    "quiet_run", "phase_coherence", "dt_max", "dt_min", "side_run", "returnmap_top_share",
-    "returnmap_cluster_density", "dv_side_ratio", "waveform_period_error",
-    "waveform_period", "strobe_dispersion", "envelope_cv")
+#: The features this module defines.
+REGIME_FEATURES = FeatureSet({
+    "one_per_cycle_share": _share1,
+    "multi_per_cycle_share": _share3,
+    "count_std": _count_std,
+    "modal_count_share": _modal,
+    "quiet_run": _quiet_run,
+    "phase_coherence": _phase,
+    "dt_max": _dt_max,
+    "dt_min": _dt_min,
+    "side_run": _side_run,
+    "returnmap_top_share": _top_share,
+    "returnmap_cluster_density": _density,
+    "dv_side_ratio": _dv_ratio,
+    "waveform_period_error": _wave_err,
+    "waveform_period": _wave_period,
+    "strobe_dispersion": _strobe_disp,
+    "envelope_cv": _env_cv,
+})
 
 #: The analysis's own features and the regime features: the set the classifier, sweeps
 #: and the ``analyze`` command compute (``analyze(rec, features=ALL_FEATURES)``).
-ALL_FEATURES: tuple[str, ...] = ANALYSIS_FEATURES + REGIME_FEATURES
+ALL_FEATURES = ANALYSIS_FEATURES | REGIME_FEATURES
