@@ -166,11 +166,13 @@ def label_simulation(result, sample_rate: float = 6400.0) -> RegimeTruth:
     ts = np.arange(int(round(result.duration * sample_rate))) / sample_rate + t0
     st = result.evaluate(ts)
     x, v = st["x"], st["xd"]
-    amp = []
-    for a, b in zip(starts[:-1], starts[1:]):
-        seg = x[(ts >= a) & (ts < b)]
-        if seg.size:
-            amp.append(0.5 * (seg.max() - seg.min()))
+    # half peak-to-peak per cycle [start_k, start_k+1) (ts is sorted), empty cycles skipped
+    edges = np.searchsorted(ts, starts, side="left")
+    lo, hi = edges[:-1], edges[1:]
+    lo = lo[hi > lo]                  # the kept cycles tile [edges[0], edges[-1])
+    xc = x[:edges[-1]] if edges.size else x
+    amp = (0.5 * (np.maximum.reduceat(xc, lo) - np.minimum.reduceat(xc, lo)) if lo.size
+           else np.zeros(0))
     strobe = result.evaluate(starts[:-1]) if starts.size > 1 else {"x": np.zeros(0),
                                                                    "xd": np.zeros(0)}
     return label_from_events(imp.t, imp.side, starts, np.asarray(amp), strobe["x"],
