@@ -165,7 +165,8 @@ class ImpactLawResult:
     effect_threshold : float
         Smallest effect a speed dependence needed to be reported:
         ``max(min_effect, EFFECT_PER_SCATTER * precision, EFFECT_PER_SIGMA *
-        s_ends)``; a law in which r rises with speed needs ``RISING_FACTOR`` times it.
+        s_ends)``; a law in which r rises with speed is reported only with
+        ``rising=True``, and then needs ``RISING_FACTOR`` times it.
     precision : float
         Weighted RMS scatter of the r estimates about the best law.
     note : str or None
