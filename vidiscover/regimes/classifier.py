@@ -691,8 +691,13 @@ def _fit_and_report(data: pd.DataFrame, tests: Mapping[str, pd.DataFrame], *, se
             "n_train": len(data),
             "train_labels": data["label"].value_counts().to_dict(),
             "sklearn_version": sklearn.__version__, "command": command}
+    from .dataset import probe_rows
+
     model, gate = fit_with_gate(data, random_state=seed, metadata=meta)
     model.metadata["rule_labels"] = list(model.rule_labels)
+    # a few training rows, recomputed by the test suite: the model must keep coming
+    # out of its own command (a change to the simulator, sensors or analysis moves them)
+    model.metadata["probe"] = probe_rows(data)
     report = {"n_train": len(data), "train_labels": meta["train_labels"], "gate": gate,
               "sets": {}}
     for name, test in tests.items():

@@ -28,7 +28,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import asdict, dataclass, field, replace
+from dataclasses import asdict, dataclass, field, fields, replace
 
 import numpy as np
 import pandas as pd
@@ -37,7 +37,7 @@ from ..errors import InputError
 from .labels import LABELS
 
 __all__ = ["PARAM_RANGES", "Case", "draw_cases", "draw_realism_cases", "simulate_case",
-           "generate", "feature_context", "M1"]
+           "generate", "feature_context", "probe_rows", "reproduce_row", "M1"]
 
 #: LO mass of every drawn rig (kg, the paper's); the ball mass follows the mass ratio.
 M1 = 4.168
@@ -412,6 +412,73 @@ def generate(n: int, seed: int, *, n_realism: int = 0, min_per_label: int | None
         rows += _run(extra, n_jobs, scheduler, progress, "targeted cases")
     df = pd.DataFrame(rows)
     return df[df["status"] == "ok"].reset_index(drop=True)
+
+
+#: Training rows a model keeps in its metadata (:func:`probe_rows`), per origin: the
+#: first rows of the paper rig's random draw, of the other rigs and of the corpus.
+PROBE_PER_ORIGIN: Mapping[str, int] = {"random": 8, "realism": 4, "corpus_dev": 2}
+#: Labels of probe rows: periodic or impact-free motions, which rounding cannot move
+#: to another attractor (a chaotic row's features differ at the rounding level between
+#: machines whose libm rounds the last bit differently).
+PROBE_LABELS = ("no_impact", "1ipc", "2ipc_sym", "2ipc_asym", "multi_ipc")
+
+
+def probe_rows(data: pd.DataFrame) -> list[dict]:
+    """A few training rows, to check later that ``train --seed`` still reproduces them.
+
+    The simulator, the sensor model and the analysis make the training set; a change
+    to any of them changes the rows, and a model trained on the old rows no longer
+    comes out of its own command. The rows kept here (:data:`PROBE_PER_ORIGIN`,
+    labels :data:`PROBE_LABELS`) are recomputed by :func:`reproduce_row` in the test
+    suite, which then says that the shipped model must be retrained.
+
+    Returns
+    -------
+    list of dict
+        ``origin``, ``name``, ``params`` (the ``param:`` columns), ``label`` and
+        ``features`` (the ``feature:`` columns) of each kept row.
+    """
+    origin = (data["param:origin"].astype(str) if "param:origin" in data
+              else pd.Series("random", index=data.index))
+    out = []
+    for kind, k in PROBE_PER_ORIGIN.items():
+        rows = data[(origin == kind) & data["label"].isin(PROBE_LABELS)].head(k)
+        for _, row in rows.iterrows():
+            out.append({
+                "origin": kind,
+                "name": row["name"] if isinstance(row.get("name"), str) else "",
+                "params": {c.split(":", 1)[1]: row[c] for c in data.columns
+                           if c.startswith("param:") and not _missing(row[c])},
+                "label": str(row["label"]),
+                "features": {c.split(":", 1)[1]: float(row[c]) for c in data.columns
+                             if c.startswith("feature:")}})
+    return out
+
+
+def _missing(v) -> bool:
+    return v is None or (isinstance(v, float) and math.isnan(v))
+
+
+def reproduce_row(probe: Mapping) -> dict:
+    """Recompute the training row a :func:`probe_rows` entry was taken from."""
+    if probe["origin"] == "corpus_dev":
+        from ..corpus import realism_case
+
+        split, index = probe["name"].rsplit("-", 1)
+        return _corpus_row(realism_case(split, int(index)))
+    names = {f.name for f in fields(Case)}
+    params = {k: _tuples(v) for k, v in probe["params"].items() if k in names}
+    params["seed"] = int(params["seed"])        # a float in a table with missing values
+    return simulate_case(Case(**params))
+
+
+def _tuples(v):
+    """JSON's lists back to the tuples they were (a case's walls, a chain's fields)."""
+    if isinstance(v, list):
+        return tuple(_tuples(x) for x in v)
+    if isinstance(v, dict):
+        return {k: _tuples(x) for k, x in v.items()}
+    return v
 
 
 def _case_of(row: dict) -> Case:
