@@ -439,13 +439,17 @@ def pulse_responses(t: np.ndarray, kind: str, order: int, cutoffs: np.ndarray,
         Q = Pw + g
         a1 = Rw * np.exp(1j * ph) / (1j * w - Q)                      # (M', K)
         a2 = Rw * np.exp(-1j * ph) / (-1j * w - Q)
-        late = np.einsum("mnk,mk->mn", E[wide], a1 * (np.exp((1j * w - Q) * T) - 1.0)
+        Ew = E if wide.all() else E[wide]
+        late = np.einsum("mnk,mk->mn", Ew, a1 * (np.exp((1j * w - Q) * T) - 1.0)
                          - a2 * (np.exp((-1j * w - Q) * T) - 1.0))
-        te = np.minimum(tw, T)                                        # (late: unused)
-        early = (a1.sum(axis=1, keepdims=True) * np.exp((1j * w - g) * te)
-                 - a2.sum(axis=1, keepdims=True) * np.exp((-1j * w - g) * te)
-                 - np.einsum("mnk,mk->mn", E[wide], a1 - a2))
-        late = (norm * late / 2j).real
-        early = (norm * early / 2j).real
-        out[wide] = np.where(tw > T, late, early)
+        res = (norm * late / 2j).real
+        # during the contact (0 <= t <= tau: a few points of a row) the other form;
+        # exp((-iw - g) t) is the conjugate of exp((iw - g) t) (g, w, t real)
+        mi, ni = np.nonzero((tw <= T) & (t[wide] >= 0))
+        if mi.size:
+            z = np.exp((1j * w[mi, 0] - g[mi, 0]) * tw[mi, ni])
+            early = (a1.sum(axis=1)[mi] * z - a2.sum(axis=1)[mi] * np.conj(z)
+                     - np.einsum("pk,pk->p", Ew[mi, ni], (a1 - a2)[mi]))
+            res[mi, ni] = (norm[mi, 0] * early / 2j).real
+        out[wide] = res
     return np.where(t >= 0, out, 0.0)
