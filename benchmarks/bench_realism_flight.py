@@ -17,13 +17,20 @@ Scores (targets of the issue):
 * *wrong but identified*: a reported law outside the tolerances (the worst kind of
   miss; listed case by case).
 
+``--oracle`` separates the analysis's errors from the estimator's: each case is also
+fitted with the TRUE ball velocity jumps in place of the pulse areas (``truth jumps``),
+and with the true jumps at the equivalent instantaneous impacts of the compliant
+contacts (``+ equivalent impacts``: where the straight approach and rebound lines of
+z meet, ``t* = (u- t_in - u+ t_out) / (u- - u+)``, beyond the wall by ``u- (t* - t_in)``).
+The recordings are simulated again for their truth (the analyses come from the cache).
+
 Figures are quoted on the held-back ``holdout`` split (``test`` was looked at case by
 case); ``--split dev`` is for tuning.
 
 Usage::
 
     python benchmarks/bench_realism_flight.py [--split test] [--n 60] [--start 0]
-        [--cache DIR]
+        [--cache DIR] [--oracle]
 """
 
 from __future__ import annotations
@@ -62,7 +69,52 @@ def analyses(case, cache: str | None = None) -> list:
     return cached(cache, case.name, compute)
 
 
-def score_case(case, cache: str | None = None) -> dict:
+def oracle_flights(case, outs) -> tuple[list, list]:
+    """The analyses' flights with the true jumps, and also at the equivalent impacts.
+
+    Each detected impact is matched to the true contact that starts within 0.5 ms of
+    it; unmatched impacts (and two detections of one contact) keep their analysed
+    values.
+    """
+    from vidiscover.analysis.flights import FlightData
+
+    jumps, equivalent = [], []
+    for k, (ratio, out) in enumerate(zip(RATIOS, outs, strict=True)):
+        sim = dataclasses.replace(case, b=case.b * ratio, seed=case.seed + k).simulate(
+            label=False)
+        fd = FlightData.of(out)
+        ti = sim.truth.impacts
+        t_in, t_out = np.asarray(ti.t_in, float), np.asarray(ti.t_out, float)
+        jj = np.clip(np.searchsorted(t_in, fd.t_imp + 2e-4) - 1, 0, max(t_in.size - 1, 0))
+        ok = (np.abs(t_in[jj] - fd.t_imp) < 5e-4) if t_in.size else np.zeros(fd.dv.size, bool)
+        ball = np.asarray(ti.w_plus, float) - np.asarray(ti.w_minus, float)
+        ok &= np.isfinite(ball[jj]) if t_in.size else ok
+        ok[1:] &= jj[1:] != jj[:-1]           # one detection per true contact (no splits)
+        ok[:-1] &= jj[:-1] != jj[1:]
+        dv = np.where(ok, -ball[jj] / fd.ratio, fd.dv)
+        jumps.append(fd.with_impacts(dv=dv, area=dv))
+        um, up = np.asarray(ti.u_minus, float)[jj], np.asarray(ti.u_plus, float)[jj]
+        den = np.where(um != up, um - up, 1.0)
+        t_eq = np.where(um != up, (um * t_in[jj] - up * t_out[jj]) / den, t_in[jj])
+        side = np.where(np.asarray(ti.side)[jj] == "right", 1.0, -1.0)
+        z_eq = side * sim.truth.b_true + um * (t_eq - t_in[jj])
+        x_eq = np.asarray(sim.result.evaluate(t_eq + sim.truth.settle)["x"], float)
+        eq = ok & np.isfinite(x_eq + z_eq) & np.isfinite(t_eq)
+        equivalent.append(fd.with_impacts(t=np.where(eq, t_eq, fd.t_imp),
+                                          y=np.where(eq, x_eq + z_eq, fd.y_imp), dv=dv,
+                                          area=dv))
+    return jumps, equivalent
+
+
+def _scored(res, case) -> str:
+    """'ok' / 'WRONG' / 'n.i.' of a fit, for the oracle columns."""
+    if not res.identified:
+        return "n.i."
+    return ("ok" if abs(res.mu - case.mu) <= MU_TOL and abs(res.theta_deg - case.theta)
+            <= THETA_TOL else "WRONG")
+
+
+def score_case(case, cache: str | None = None, oracle: bool = False) -> dict:
     """Record one case at three clearances, pool the analyses, score the flight law."""
     t0 = time.perf_counter()
     outs = analyses(case, cache)
@@ -81,6 +133,14 @@ def score_case(case, cache: str | None = None) -> dict:
                    bad=bool(res.mu < 0 or abs(res.theta_deg) > 10.0))
     else:
         row.update(within=False, bad=False)
+    if oracle:
+        for key, recs in zip(("oracle_jumps", "oracle_equivalent"), oracle_flights(case, outs),
+                             strict=True):
+            fit = discover_flight_law(recs, n_boot=0)
+            d = fit.diagnostic
+            row[key] = _scored(fit, case)
+            row[key + "_fit"] = (f"mu {d.get('mu', np.nan):.3f} theta "
+                                 f"{d.get('theta_deg', np.nan):.2f} misfit {fit.misfit:.2%}")
     return row
 
 
@@ -91,6 +151,8 @@ def main() -> None:
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--cache", default=None,
                     help="directory caching the analyses (the slow part) between runs")
+    ap.add_argument("--oracle", action="store_true",
+                    help="also fit with the true jumps (and equivalent impacts) of each case")
     args = ap.parse_args()
     cases = realism_corpus(args.split, min(args.start + args.n, N_CASES[args.split]))
     cases = cases[args.start:]
@@ -100,7 +162,7 @@ def main() -> None:
     rows = []
     for case in cases:
         try:
-            r = score_case(case, args.cache)
+            r = score_case(case, args.cache, args.oracle)
         except Exception as err:  # noqa: BLE001 - a failing case is a result too
             print(f"  {case.name}: FAILED {type(err).__name__}: {err}", flush=True)
             rows.append({"name": case.name, "failed": str(err), "within": False,
@@ -115,6 +177,10 @@ def main() -> None:
         print(f"  {r['name']} true mu {r['mu']:.3f} theta {r['theta']:.2f} -> {got} "
               f"{'ok' if r['within'] else ('BAD' if r['bad'] else 'miss')} "
               f"({r['seconds']:.1f} s)", flush=True)
+        if args.oracle:
+            print(f"      truth jumps: {r['oracle_jumps']} ({r['oracle_jumps_fit']}); "
+                  f"+ equivalent impacts: {r['oracle_equivalent']} "
+                  f"({r['oracle_equivalent_fit']})", flush=True)
     n = len(rows)
     within = float(np.mean([r["within"] for r in rows])) if rows else float("nan")
     ident = [r for r in rows if r["identified"]]
@@ -126,6 +192,12 @@ def main() -> None:
     for r in wrong:
         print(f"  outside: {r['name']} mu {r['mu_est']:.3f} vs {r['mu']:.3f}, theta "
               f"{r['theta_est']:.2f} vs {r['theta']:.2f}")
+    if args.oracle:
+        for key, label in (("oracle_jumps", "truth jumps"),
+                           ("oracle_equivalent", "truth jumps + equivalent impacts")):
+            got = [r.get(key) for r in rows if key in r]
+            print(f"  oracle, {label}: within {got.count('ok')}, wrong {got.count('WRONG')}, "
+                  f"not identified {got.count('n.i.')} of {len(got)}")
     print("\nmeasured vs target:")
     print(f"  {'pooled law within mu 0.03, theta 0.3 deg':<44} {within:8.3f}  target >= "
           f"{TARGET_WITHIN}  {'MET' if within >= TARGET_WITHIN else 'MISSED'}")

@@ -296,3 +296,53 @@ def test_wall_scale_test_sees_a_biased_wall_and_passes_a_clean_one():
     biased = _wall_scale_test(X, X @ law + noise + 0.03 * walls[:, 0], walls, 1e-3)
     assert clean[0] < 9.21
     assert biased[0] > 9.21 and (biased[1] > 0.015 or biased[2] > 0.15)
+
+
+def _exact_jumps(out, truth):
+    """The analysis's flights with the true LO velocity jumps of the matched impacts."""
+    from vidiscover.analysis.flights import FlightData
+
+    fd = FlightData.of(out)
+    t_true = np.asarray(truth.impacts.t, float)
+    j = np.clip(np.searchsorted(t_true, fd.t_imp), 1, t_true.size - 1)
+    j = np.where(np.abs(t_true[j - 1] - fd.t_imp) < np.abs(t_true[j] - fd.t_imp), j - 1, j)
+    ok = np.abs(t_true[j] - fd.t_imp) < 5e-4
+    dv = np.where(ok, np.asarray(truth.impacts.dv, float)[j], fd.dv)
+    return fd.with_impacts(dv=dv, area=dv)
+
+
+def test_exact_jumps_passed_as_flight_data_close_the_tents():
+    """The true jumps in place of the pulse areas (FlightData.with_impacts, the
+    benchmark's --oracle): the tents close (misfit ~0.1 %) and the law is mu = 0, no
+    tilt."""
+    recs = [_exact_jumps(*_case(b, 0.0, 0.0)) for b in CLEARANCES]
+    res = discover_flight_law(recs, n_boot=0)
+    assert res.identified, res.reason
+    assert res.mu == 0.0 and abs(res.theta_deg) < 0.05
+    assert res.misfit < 0.003
+
+
+def test_with_impacts_moves_the_flights_and_checks_lengths():
+    from vidiscover.analysis.flights import FlightData
+
+    fd = FlightData.of(_case(0.006, 0.0, 0.0)[0])
+    moved = fd.with_impacts(t=fd.t_imp + 1e-4)
+    np.testing.assert_allclose(moved.ts, fd.ts + 1e-4)
+    np.testing.assert_allclose(moved.te, fd.te + 1e-4)
+    np.testing.assert_array_equal(moved.dv, fd.dv)
+    np.testing.assert_array_equal(fd.t_imp + 1e-4, moved.t_imp)    # the original kept
+    with pytest.raises(InputError, match="one value per impact"):
+        fd.with_impacts(dv=fd.dv[:-1])
+
+
+def test_a_negligible_negative_friction_is_zero_not_a_refusal():
+    """dev-001 (no friction, no tilt) with the true jumps at the equivalent impacts
+    closes to 0.00 % and lands at mu = -5e-5 with a standard error ~0: that is mu = 0.
+    A fit clearly below 0 (beyond 0.005 and twice its standard error) is still refused."""
+    from vidiscover.discovery.flight_law import _negative_friction
+
+    assert not _negative_friction(-5e-5, 0.0)
+    assert not _negative_friction(-0.004, 1e-4)
+    assert not _negative_friction(-0.03, 0.02)
+    assert _negative_friction(-0.02, 0.001)
+    assert _negative_friction(-0.006, 0.0)

@@ -10,6 +10,7 @@ same way.
 
 from __future__ import annotations
 
+import copy
 import math
 
 import numpy as np
@@ -84,6 +85,36 @@ class FlightData:
             raise InputError("the flights need AnalysisResult objects from analyze(rec) "
                              "(their recording is missing)")
         return cls(rec, analysis.reconstruction, analysis.detection, name=analysis.name)
+
+    def with_impacts(self, t=None, y=None, dv=None, area=None) -> FlightData:
+        """A copy with other impact times, ball positions or velocity jumps.
+
+        For diagnosis: e.g. the true jumps, or the equivalent instantaneous impacts of
+        compliant contacts, in place of the analysed ones, to tell the analysis's
+        errors from the flight-law estimator's. The flights' start and end times
+        follow ``t``; the LO motion is kept.
+
+        Parameters
+        ----------
+        t, y, dv, area : ndarray, optional
+            Impact times (s), ball positions (m), LO velocity jumps and raw pulse
+            areas (m/s), one per impact; None keeps the analysed values.
+
+        Returns
+        -------
+        FlightData
+        """
+        out = copy.copy(self)
+        for name, val in (("t_imp", t), ("y_imp", y), ("dv", dv), ("area", area)):
+            if val is None:
+                continue
+            val = np.array(val, dtype=float)
+            if val.shape != self.dv.shape:
+                raise InputError(f"with_impacts: {name} needs one value per impact "
+                                 f"({self.dv.size}), got shape {val.shape}")
+            setattr(out, name, val)
+        out.ts, out.te = out.t_imp[self.i_s], out.t_imp[self.i_e]
+        return out
 
     @property
     def n_flights(self) -> int:

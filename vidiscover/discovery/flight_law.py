@@ -65,8 +65,8 @@ each term is reported as its inclusion probability.
 **Admissibility.** Candidate laws with mu < 0 are not considered (the selection is
 constrained to mu >= 0): where the free fit lands slightly below zero, the law
 without friction is kept if it still closes the tents within their precision. A
-free fit more than twice its standard error below zero is not identified (mu >= 0
-does not close the tents).
+free fit more than twice its standard error (and more than 0.005) below zero is not
+identified (mu >= 0 does not close the tents).
 
 **Pulse-area scale per wall.** The pulse areas' errors behind causal filters and
 compliant walls are mostly a scale per wall, repeated at every impact, which the
@@ -133,6 +133,7 @@ _MAX_MISFIT = 0.01          # largest RMS residual / RMS ball velocity jump
 _CONSTRAINED = True         # candidate laws with mu < 0 are not considered
 _SCALE_TEST = False         # True: refuse laws that move with a free pulse-area scale per wall
 _HAUSMAN = 9.21             # chi2(2) at 99 %
+_MU_NEGLIGIBLE = 0.005       # a free fit this little below mu = 0 is mu = 0
 _MAX_DISTRACTORS = 1        # terms besides constant and friction in one candidate
 #: Starting laws (mu, theta_deg) of the reconstruction fixed point.
 _STARTS = ((0.0, 0.0), (0.3, 2.0), (0.3, -2.0))
@@ -666,6 +667,21 @@ def _wall_scale_test(X: np.ndarray, Y: np.ndarray, scale_cols: np.ndarray, floor
             abs(free[1] - tied[1]))
 
 
+def _negative_friction(mu_free: float, mu_se: float) -> bool:
+    """Whether the free fit's ``mu_free`` lies below 0 beyond its precision.
+
+    More than twice its standard error and more than :data:`_MU_NEGLIGIBLE` below
+    zero: exact jumps make the standard error ~0, and a fit a hair below 0 is then
+    mu = 0, not a refusal.
+
+    Examples
+    --------
+    >>> _negative_friction(-5e-5, 0.0), _negative_friction(-0.02, 0.001)
+    (False, True)
+    """
+    return mu_free < -max(2.0 * mu_se, _MU_NEGLIGIBLE)
+
+
 def _mu_theta(names, coef):
     d = dict(zip(names, coef, strict=True))
     mu = -d.get(_FRICTION, 0.0) / G_ACCEL
@@ -682,9 +698,11 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
 
     Parameters
     ----------
-    analyses : sequence of AnalysisResult
+    analyses : sequence of AnalysisResult or FlightData
         Results of :func:`vidiscover.analysis.analyze` (any ``mu``), one or more
-        recordings of the same rig (their tents are pooled).
+        recordings of the same rig (their tents are pooled); or their
+        :class:`~vidiscover.analysis.flights.FlightData` (e.g. with other impacts,
+        :meth:`~vidiscover.analysis.flights.FlightData.with_impacts`).
     seed : int
         Seed of the bootstrap.
     n_boot : int
@@ -761,7 +779,7 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
         raise InputError(f"max_iter must be an integer >= 1, was {max_iter!r}")
     if not (isinstance(max_tilt_deg, (int, float)) and 0 < max_tilt_deg < 90):
         raise InputError(f"max_tilt_deg must be in (0, 90) degrees, was {max_tilt_deg!r}")
-    records = [FlightData.of(a) for a in analyses]
+    records = [a if isinstance(a, FlightData) else FlightData.of(a) for a in analyses]
     tents = _Tents(records, library)
     if tents.n < len(library) + 5:
         raise InputError(f"only {tents.n} usable impacts (tents) for {len(library)} "
@@ -869,7 +887,7 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
             f"the fit moves by {dmu:.2g} in mu and {dth:.2g} deg in theta (significant: "
             f"chi2 {hausman:.3g} > {_HAUSMAN:g})")
     mu_free = _mu_theta((_CONSTANT, _FRICTION), unconstrained)[0]
-    if _CONSTRAINED and mu_free < -2.0 * mu_se:
+    if _CONSTRAINED and _negative_friction(mu_free, mu_se):
         reasons.append(f"the fit wants a negative friction, mu = {mu_free:.3g} (beyond twice "
                        f"its standard error {mu_se:.2g}): mu >= 0 does not close the tents")
     if mu < 0:
