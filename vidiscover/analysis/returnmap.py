@@ -191,6 +191,21 @@ class FeatureContext:
             return self.ts, self.x
         return self.ts[ok], self.x[ok]
 
+    def memo(self, key, func: Callable[[FeatureContext], object]):
+        """``func(self)``, computed once per context under ``key``.
+
+        For work several features share (the regime features' cycle waveforms); keep
+        what it returns unmodified.
+        """
+        cache = self._memo
+        if key not in cache:
+            cache[key] = func(self)
+        return cache[key]
+
+    @functools.cached_property
+    def _memo(self) -> dict:
+        return {}
+
     def amplitude(self) -> float:
         """The largest |x| over the finite samples (NaN without any)."""
         _, xf = self.finite_motion()

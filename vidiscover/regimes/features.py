@@ -169,23 +169,33 @@ def cycle_waveforms(ctx: FeatureContext, points: int = _WAVE_POINTS) -> np.ndarr
     ndarray, shape (n_cycles, points)
         Empty when there is no complete cycle or no finite displacement.
     """
+    return ctx.memo(("cycle_waveforms", points), lambda c: _cycle_waveforms(c, points))
+
+
+def _cycle_waveforms(ctx: FeatureContext, points: int) -> np.ndarray:
     c = ctx.cycles()
     ts, xf = ctx.finite_motion()
     if c.size < 2 or xf.size < 2:
         return np.zeros((0, points))
     grid = c[:-1, None] + np.diff(c)[:, None] * (np.arange(points) / points)[None, :]
-    return np.interp(grid.ravel(), ts, xf).reshape(grid.shape)
+    w = np.interp(grid.ravel(), ts, xf).reshape(grid.shape)
+    w.flags.writeable = False                 # shared by the features of one context
+    return w
 
 
-def _waveform_errors(ctx: FeatureContext) -> list[float]:
+def _waveform_errors(ctx: FeatureContext) -> tuple[float, ...]:
     """Worst RMS change of the cycle waveform over p = 1..4 cycles.
 
-    Over the last half of the record, relative to max |x|.
+    Over the last half of the record, relative to max |x| (once per context).
     """
+    return ctx.memo("waveform_errors", _waveform_errors_of)
+
+
+def _waveform_errors_of(ctx: FeatureContext) -> tuple[float, ...]:
     w = cycle_waveforms(ctx)
     amp = ctx.amplitude()
     if w.shape[0] < 6 or not amp > 0:
-        return []
+        return ()
     w = w[w.shape[0] // 2:]
     out = []
     for p in range(1, 5):
@@ -193,7 +203,7 @@ def _waveform_errors(ctx: FeatureContext) -> list[float]:
             break
         rms = np.sqrt(np.mean((w[p:] - w[:-p]) ** 2, axis=1))
         out.append(float(rms.max() / amp))
-    return out
+    return tuple(out)
 
 
 def _wave_err(ctx: FeatureContext) -> float:
