@@ -203,3 +203,25 @@ def test_chatter_at_2560_hz_on_a_large_forced_response():
     assert (ok & ~resting).sum() == 160 and (found & ok & ~resting).sum() >= 148   # 151
     assert (ok & resting).sum() == 39
     assert np.median(np.abs(det.t[ie] - np.asarray(imp.t_in)[it])) < 55e-6       # 43.7 us
+
+
+@pytest.mark.slow
+def test_a_resting_contacts_entry_is_found_under_its_load_step():
+    """Kelvin-Voigt chatter ending at rest (dev-090, Chebyshev-1, 5120 Hz): 39 chatter
+    runs on the soft left wall end with the ball coming to rest (6.4 ms contacts)
+    0.66 ms after the last re-impact (criterion SNR 13.8). The resting ball loads the LO
+    (m2/m1 = 0.017 of its 93 m/s^2: a 1.6 m/s^2 step); the smoother's blur of that
+    step cancelled the entry pulse, and 14 entries were missed (225 of 239 found,
+    count outside 3 %). With the load step moved into the smooth part (searched
+    after each run's last pulse, its height set by the masses) and the entry pulse
+    fitted with it, 238 of 239 are found (38 of the 39 entries), with one false pulse."""
+    imp, ok, _, det, ie, it = _episodes(90)
+    resting = np.asarray(imp.t_out) - np.asarray(imp.t_in) > 2e-3
+    found = np.zeros(ok.size, dtype=bool)
+    found[it] = True
+    n_est = det.n - int((~ok[it]).sum())
+    assert ok.sum() == 239 and (ok & resting).sum() == 39
+    assert abs(n_est - ok.sum()) <= 0.03 * ok.sum()                         # 239 / 239
+    assert (found & ok & resting).sum() >= 37                               # 38 (was 25)
+    assert (found & ok).sum() >= 236 and det.n - ie.size <= 2               # 238, 1 false
+    assert np.median(np.abs(det.t[ie] - np.asarray(imp.t_in)[it])) < 15e-6  # 11.9 us

@@ -322,6 +322,8 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         win = n if n % 2 else n - 1
     fit = _Fitter(af, bad, models, fs, int(fit_halfwidth))
     hw = fit.hw
+    m1, m2 = float(getattr(rec.meta, "m1", 0.0)), float(getattr(rec.meta, "m2", 0.0))
+    load_ratio = m2 / m1 if m1 > 0 and m2 > 0 else 0.0
     lobe = _main_lobe(models, fs)
 
     # (full-length arrays are made in place and dropped when done: a long record holds
@@ -330,7 +332,20 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         sm = af - fit.render()
         return _fill_in_place(sm, bad) if bad.any() else sm
 
-    def smoother_input(prev=None):
+    loads: list[tuple[int, np.ndarray]] = []    # resting-contact load steps (start, values)
+
+    def smoothed(prev=None):
+        # the smoother over the smooth part, the resting-contact loads taken out before
+        # and put back after (a load step blurred by the smoother leaves a residual of
+        # half the step before the entry, of the sign opposite to the entry pulse)
+        if not loads:
+            return savgol_smooth(smoother_input(prev), win)
+        if prev is not None:
+            prev = _add_loads(prev.copy(), loads, -1.0)
+        y = _add_loads(af - fit.render(), loads, -1.0)
+        return _add_loads(savgol_smooth(smoother_input(prev, y), win), loads, 1.0)
+
+    def smoother_input(prev=None, sm=None):
         # the smooth part with the main lobes of the fitted pulses bridged: what the
         # pulse model misses there would leak into the smooth part and come back as
         # false pulses at the edges of the smoother's window. The bridge is drawn
@@ -338,7 +353,7 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         # forced response cuts its chord (13 samples at 2560 Hz of a 19 Hz,
         # 500 m/s^2 response sag by 25 m/s^2, more than the pulses: the spurious
         # pulses fitted to that sag then feed the next smooth part)
-        sm = af - fit.render()
+        sm = af - fit.render() if sm is None else sm
         mask = bad.copy() if bad.any() else np.zeros(n, dtype=bool)
         if fit.n:
             c = np.rint(fit.pos).astype(np.int64)
@@ -392,8 +407,22 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
                 base = savgol_smooth(smoother_input(base), win)
                 fit.backfit(base, iterations=1)
     # later rounds: the residual of the fitted pulses over the clean smooth part (weak
-    # pulses hardly change the smooth part or the noise, so neither is recomputed)
-    for rnd in range(max_rounds):
+    # pulses hardly change the smooth part or the noise, so neither is recomputed);
+    # then, when the ball comes to rest on a wall at the end of a chatter run, its load
+    # is moved into the smooth part and the rounds run again
+    rnd = 0
+    while rnd < 2 * max_rounds:
+        if rnd == max_rounds:
+            if not (fit.n and load_ratio > 0):
+                break
+            found, entries = _rest_loads(fit, af - fit.render(), base, bad, load_ratio,
+                                         sigma, win, threshold)
+            if not found:
+                break
+            loads.extend(found)
+            base = smoothed(base)
+            fit.add(entries)
+            fit.backfit(base, iterations=1)
         resid = smooth_part()
         resid -= base
         resid[bad] = 0.0
@@ -408,15 +437,19 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         idx = _candidates(z, threshold, near=near, span=hw, overwrite=True)
         del z
         if idx.size == 0:
-            break
+            if rnd >= max_rounds:
+                break
+            rnd = max_rounds
+            continue
         fit.add(idx)
         fit.backfit(base, iterations=1)
         fit.prune(0.8 * threshold, sigma)
         if _largest_near(fit.pos, fit.amp, idx) * max(fit.knorm) / sigma > _REBASE_SNR:
             # a strong pulse missed by the first round was smeared into the smooth
             # part: recompute it, else its lobes come back as false pulses
-            base = savgol_smooth(smoother_input(base), win)
+            base = smoothed(base)
             fit.backfit(base, iterations=1)
+        rnd += 1
     # final residual, noise and pruning at the threshold
     smooth = smooth_part()
     resid = smooth - base
@@ -526,6 +559,141 @@ def _main_lobe(models, fs: float) -> np.ndarray:
 
 
 _MAX_LOBE = 12
+
+_REST_DCHI2 = 25.0       # residual energy (noise variances) a resting-contact load must explain
+_REST_SHARE = 0.5        # ... and this share of its own energy (the data holds that step)
+_REST_STEP = 0.25        # entry search step (samples)
+_REST_GAPS = 10.0        # entry searched up to this many last chatter gaps after the last pulse
+
+
+def _add_loads(y: np.ndarray, loads, sign: float) -> np.ndarray:
+    """``y`` (modified in place) plus ``sign`` times the load segments; returns ``y``."""
+    n = y.size
+    for k0, vals in loads:
+        lo, hi = max(k0, 0), min(k0 + vals.size, n)
+        if hi > lo:
+            y[lo:hi] += sign * vals[lo - k0:hi - k0]
+    return y
+
+
+def _rest_loads(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
+                load_ratio: float, sigma: float, win: int, threshold: float):
+    """Load steps of the ball coming to rest on a wall at the end of a chatter run.
+
+    While the ball rests on a wall (pressed on it by the LO's acceleration), the LO
+    carries its mass: the LO acceleration is ``m1 / (m1 + m2)`` of what it would be,
+    a load of ``-(m2 / m1) a`` from the entry of the resting contact until the
+    acceleration changes sign and the ball lifts off. The load begins as a step
+    (``m2 / m1 |a|``, 3.4 m/s^2 at 440 m/s^2 and m2/m1 = 0.0077) of the entry pulse's
+    sign, through the instrument's response, which the smoother blurs: half the step
+    is then left before the entry, of the opposite sign, and hides the entry pulse.
+    After the last pulse of each same-wall run (three pulses at least, closing in,
+    the LO pressing the ball on that wall), the entry is searched (the filtered
+    step, its amplitude set by the masses, over a local cubic) up to
+    :data:`_REST_GAPS` last gaps later and before the lift-off; it is kept when it
+    explains more than :data:`_REST_DCHI2` noise variances of the residual ``y``
+    (data minus pulses) and :data:`_REST_SHARE` of its own energy.
+
+    Returns ``(first sample, load values)`` segments, up to the lift-off, and the
+    positions of the entries whose pulse (fitted with the step) exceeds
+    ``threshold``: the entry pulse and the load step overlap within the band limit;
+    the step, placed where it fits best, leaves the pulse to the fit. A bounce less
+    than about 2 samples before the entry cannot be told from a slightly earlier
+    step (the step moved by dt takes an area of step x dt, as much as the bounce's
+    at dev-094's 8192 Hz): those stay unresolved.
+    """
+    n = fit.n_samples
+    pos, amp = fit.pos, fit.amp
+    if pos.size < 2:
+        return [], np.zeros(0)
+    s = np.where(amp >= 0, 1.0, -1.0)
+    c = np.clip(np.rint(pos).astype(np.int64), 0, n - 1)
+    neg = base < 0
+    zc = np.flatnonzero(neg[1:] != neg[:-1]) + 1
+    nxt = np.searchsorted(zc, c, side="right")
+    lift = zc[np.minimum(nxt, zc.size - 1)] if zc.size else np.full(pos.size, n)
+    lift = np.where(nxt < zc.size, lift, n)
+    # the last of the pulses on the wall the LO presses the ball on, before
+    # the lift-off (weaker pulses of the other wall in between are the blurred step's
+    # own artefacts, not a crossing)
+    on = np.flatnonzero(s * base[c] < 0)
+    cand = []
+    for side in (1.0, -1.0):
+        j = on[s[on] == side]
+        if j.size < 2:
+            continue
+        grp = lift[j]
+        # three pulses at least, the last gap shorter than the one before: a chatter
+        # run's geometric accumulation
+        end = np.flatnonzero(np.r_[grp[1:] != grp[:-1], True])
+        end = end[end >= 2]
+        end = end[(grp[end - 2] == grp[end])
+                  & (pos[j[end]] - pos[j[end - 1]] < pos[j[end - 1]] - pos[j[end - 2]])]
+        for i, prev in zip(j[end], j[end - 1]):
+            between = (pos > pos[i]) & (pos < lift[i])
+            if not (np.abs(amp[between]) >= abs(amp[i])).any():
+                cand.append((i, prev))
+    h = win // 2
+    out, entries = [], []
+    for i, prev in cand:
+        gap = pos[i] - pos[prev]
+        p_lo = pos[i] + 0.5
+        p_hi = min(pos[i] + max(_REST_GAPS * gap, 3.0), float(lift[i]) - 1.0, pos[i] + h)
+        if p_hi <= p_lo:
+            continue
+        model = fit.models[0 if s[i] > 0 else 1]
+        H = model.span(fit.fs) + 1
+        k = np.arange(max(c[i] - h, 0), min(int(math.ceil(p_hi)) + h, n))
+        w = ~bad[k]
+        if w.sum() < 12:
+            continue
+        grid = np.arange(p_lo, p_hi + 1e-9, _REST_STEP)
+        fl = np.floor(grid)
+        # the filtered unit step of each entry: the cumulative kernel, normalised
+        jj = np.arange(-H, H + 1, dtype=float)
+        g = model.kernel(jj[None, :] - (grid - fl)[:, None], fit.fs)
+        cg = np.cumsum(g, axis=1) / np.maximum(g.sum(axis=1, keepdims=True), 1e-300)
+        idx = k[None, :] - fl.astype(np.int64)[:, None] + H
+        G = np.where(idx > 2 * H, 1.0,
+                     np.where(idx < 0, 0.0,
+                              np.take_along_axis(cg, np.clip(idx, 0, 2 * H), axis=1)))
+        load = -load_ratio * base[k] * (k < lift[i])
+        Tw = (G * load[None, :])[:, w]
+        # local cubic, a correction of the last pulse (area and time: its fit was made
+        # over the blurred step) and a pulse at the entry (the last, weakest bounces
+        # come with it)
+        pk = fit.peaks[0 if s[i] > 0 else 1]
+        kw = k[w].astype(float)
+        V = np.column_stack([np.vander((kw - k.mean()) / k.size, 4),
+                             model.kernel(kw - pos[i], fit.fs) / pk,
+                             (model.kernel(kw - pos[i] + 0.25, fit.fs)
+                              - model.kernel(kw - pos[i] - 0.25, fit.fs)) / pk])
+        P = model.kernel(kw[None, :] - grid[:, None], fit.fs) / pk
+        # projections off [V, P_g] per entry g: off V once, then off P_g's remainder
+        Q, _ = np.linalg.qr(V)
+        yw = y[k][w]
+        y0 = yw - Q @ (Q.T @ yw)
+        T0 = Tw - (Tw @ Q) @ Q.T
+        u = P - (P @ Q) @ Q.T
+        u /= np.maximum(np.sqrt(np.einsum("gw,gw->g", u, u)), 1e-300)[:, None]
+        r0 = y0[None, :] - u * (u @ y0)[:, None]
+        T = T0 - u * np.einsum("gw,gw->g", u, T0)[:, None]
+        R = r0 - T
+        rss = np.einsum("gw,gw->g", R, R)
+        b = int(np.argmin(rss))
+        gain = float(r0[b] @ r0[b] - rss[b])
+        if gain > _REST_DCHI2 * sigma ** 2 and gain > _REST_SHARE * float(T[b] @ T[b]):
+            e = int(fl[b])
+            kk = np.arange(e - H, int(lift[i]))
+            gi = kk - e + H
+            vals = -load_ratio * base[np.clip(kk, 0, n - 1)]
+            vals *= np.where(gi > 2 * H, 1.0, cg[b][np.clip(gi, 0, 2 * H)])
+            out.append((e - H, vals))
+            coef = np.linalg.lstsq(np.column_stack([V, P[b]]), yw - Tw[b], rcond=None)[0][-1]
+            if coef * s[i] > 0 and abs(coef) / pk * fit.knorm[0 if s[i] > 0 else 1] > (
+                    threshold * sigma):
+                entries.append(grid[b])
+    return out, np.array(entries)
 
 
 #: Pulses further apart than this (s) are not judged by :meth:`_Fitter.drop_infeasible`:
