@@ -7,9 +7,12 @@ results store ``{name: ndarray}`` and expose a cached DataFrame property.
 from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
+
+if TYPE_CHECKING:      # pandas is imported where a table is built, not to analyse
+    import pandas as pd
 
 __all__ = ["check_columns", "to_frame", "empty_columns"]
 
@@ -34,6 +37,8 @@ def check_columns(cols: Mapping[str, np.ndarray], names: Sequence[str], where: s
 
 def to_frame(cols: Mapping[str, np.ndarray], names: Sequence[str]) -> pd.DataFrame:
     """DataFrame with the columns ``names`` in that order (then any others)."""
+    import pandas as pd
+
     order = list(names) + [c for c in cols if c not in names]
     return pd.DataFrame({c: np.asarray(cols[c]) for c in order})
 

@@ -15,9 +15,9 @@ import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from .._atomic import to_jsonable
 from ..errors import InputError
@@ -27,6 +27,9 @@ from .reconstruction import Reconstruction, reconstruct
 from .restitution import MU_TABLE, RestitutionEstimate, estimate_restitution, mu_table
 from .returnmap import FeatureContext, ReturnMap, compute_features, return_map
 from .signals import Forcing, Offsets, estimate_offsets, fit_forcing
+
+if TYPE_CHECKING:      # pandas is imported where a table is built, not to analyse
+    import pandas as pd
 
 __all__ = ["AnalysisResult", "analyze"]
 
@@ -153,6 +156,8 @@ class AnalysisResult:
             cols[k] = s[k]
         cols.update({"r": r["r"], "r_status": r["status"], "r_used": r["used"],
                      "r_rel_error": r["rel_error"]})
+        import pandas as pd
+
         return pd.DataFrame(cols)
 
     def mu_table(self, mus=MU_TABLE) -> pd.DataFrame:

@@ -38,9 +38,9 @@ import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from ..errors import InputError
 from ..params import G_ACCEL
@@ -48,6 +48,9 @@ from ._table import check_columns, to_frame
 from .friction import integrate_flights, solve_flights
 from .impacts import ImpactDetection
 from .signals import fill_gaps, robust_std
+
+if TYPE_CHECKING:      # pandas is imported where a table is built, not to analyse
+    import pandas as pd
 
 __all__ = ["Reconstruction", "reconstruct", "FLIGHT_COLUMNS", "IMPACT_STATE_COLUMNS"]
 

@@ -25,11 +25,14 @@ import functools
 import math
 from collections.abc import Callable, Iterable, Iterator, Mapping
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from .signals import Forcing
+
+if TYPE_CHECKING:      # pandas is imported where a table is built, not to analyse
+    import pandas as pd
 
 __all__ = ["ReturnMap", "return_map", "FeatureContext", "FeatureSet", "ANALYSIS_FEATURES",
            "compute_features"]
@@ -78,6 +81,8 @@ class ReturnMap:
 
     def to_frame(self) -> pd.DataFrame:
         """Points as a DataFrame: ``dt_i``, ``dt_next``, ``side``, ``cluster``."""
+        import pandas as pd
+
         return pd.DataFrame({"dt_i": self.x, "dt_next": self.y, "side": self.side,
                              "cluster": self.cluster})
 
