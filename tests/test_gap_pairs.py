@@ -130,3 +130,34 @@ def test_a_pair_whose_law_per_wall_has_no_slope_is_reported_as_constants_per_wal
     pair2 = _fit("coulomb_friction+velocity_dependent_restitution", 3.0,
                  {"coulomb_friction": {"mu": 0.16}, "velocity_dependent_restitution": sloped}, 5)
     assert _constant_laws(pair2) is pair2
+
+
+def test_a_best_law_per_wall_gets_forward_selection_on_its_constants_per_wall_too():
+    # drawn asym + friction at 10 mm: the law per wall was best alone (gap 29, its
+    # slope bent to what friction does to each wall); asym + friction (gap 1.3) was
+    # never tried, as the constants per wall neither led nor removed enough to be pooled
+    nominal = _fit("nominal", 2546.0, n_params=0)
+    fits = [_fit("velocity_dependent_restitution", 28.6, n_params=4),
+            _fit("asymmetric_restitution", 337.0, n_params=2),
+            _fit("clearance_error", 632.0), _fit("inclination", 1144.0),
+            _fit("coulomb_friction", 2435.0), _fit("contact_duration", 2545.0)]
+    items = {(a.name, b) for a, b in _pair_items(nominal, fits)}
+    assert ("asymmetric_restitution", "coulomb_friction") in items
+    assert ("asymmetric_restitution", "inclination") in items
+    assert ("velocity_dependent_restitution", "coulomb_friction") in items
+    assert len(items) == len({frozenset(i) for i in items})
+
+
+def test_a_direct_estimate_joins_the_grid_of_a_1d_search():
+    from vidiscover.gap.fit import _minimise_1d
+
+    # a well narrower than the grid step (the gap of friction with unequal walls is
+    # sharp in mu): the grid 0, 0.1, ..., 0.6 steps over it, the estimate does not
+    def gap(mu):
+        return 2.0 if abs(mu - 0.237) < 0.01 else 50.0 + 100.0 * abs(mu - 0.1)
+
+    assert _minimise_1d(gap, 0.0, 0.6, n_grid=7) == pytest.approx(0.1, abs=0.03)
+    assert _minimise_1d(gap, 0.0, 0.6, n_grid=7, extra=0.236) == pytest.approx(0.237, abs=0.01)
+    # an estimate outside the range or undefined is ignored
+    assert _minimise_1d(gap, 0.0, 0.6, n_grid=7, extra=float("nan")) == pytest.approx(
+        0.1, abs=0.03)

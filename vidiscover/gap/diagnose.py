@@ -420,7 +420,8 @@ def _pair_items(nominal, fits, max_params=None) -> list[tuple]:
     """Which pairs (first effect's single fit, second effect's name) are fitted.
 
     * pairs among the :data:`PAIR_POOL` best single effects that removed something;
-    * forward selection: every other effect on top of the best of them;
+    * forward selection: every other effect on top of the best of them (and on top
+      of its constants per wall when the best is a law per wall);
     * the pool's effects with every effect whose single fit ended well above the
       nominal model. The nominal model is nested in every candidate, so such a fit
       has left the recording's attractor (a restitution fitted to the r that
@@ -443,6 +444,12 @@ def _pair_items(nominal, fits, max_params=None) -> list[tuple]:
     order = {f.name: i for i, f in enumerate(fits)}
     wanted = [(a, b) for i, a in enumerate(pool) for b in pool[i + 1:]]
     wanted += [(pool[0], b) for b in fits if b is not pool[0]]
+    # a law per wall that is best alone absorbs what friction or a tilt does to each
+    # wall's r (its slope bends to fit them), and paired with them it stays there;
+    # forward selection runs on its constants per wall as well
+    simple = next((f for f in fits if f.name == NESTED.get(pool[0].name)), None)
+    if simple is not None and (max_params is None or simple.n_params < max_params):
+        wanted += [(simple, b) for b in fits if b is not simple]
     wanted += [(a, b) for a in pool[1:] for b in failed]
     items, seen = [], set()
     for a, b in wanted:
