@@ -21,7 +21,10 @@ two-effect cases; true parameters inside the nominal 95 % intervals in >= 80 %;
 draws other sensor noise for the same cases: the method was developed on seed 0, so
 quote figures from another seed. ``--drawn N --seed S`` runs N cases drawn at random
 instead (:func:`vidiscover.gap.battery.drawn_cases`: clearances, magnitudes and engines
-that the fixed battery does not have), a fresh held-out set for every seed.
+that the fixed battery does not have), a fresh held-out set for every seed. The
+draws come in rounds of 12 kinds (the 8 catalogue effects, 2 no-effect cases, then
+the 2 two-effect kinds), so ``--drawn 8`` holds no two-effect case: use ``--drawn 12``
+or ``24`` to quote the pairs (the first 8 cases of any N are those of ``--drawn 8``).
 
 Usage::
 
@@ -54,7 +57,8 @@ def main() -> None:
                          "was tuned on; others: fresh draws of the same cases)")
     ap.add_argument("--drawn", type=int, default=0, metavar="N",
                     help="instead of the battery, N cases drawn at random from --seed "
-                         "(battery.drawn_cases: a fresh held-out set for each seed)")
+                         "(battery.drawn_cases: a fresh held-out set for each seed; the "
+                         "two-effect cases are the 11th and 12th of every 12)")
     ap.add_argument("--time", action="store_true", help="also time one diagnosis")
     ap.add_argument("--json", default=None, help="write the battery result here")
     ap.add_argument("--calibrate", action="store_true", help="recompute the model-form scales")
