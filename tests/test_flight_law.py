@@ -346,3 +346,44 @@ def test_a_negligible_negative_friction_is_zero_not_a_refusal():
     assert not _negative_friction(-0.03, 0.02)
     assert _negative_friction(-0.02, 0.001)
     assert _negative_friction(-0.006, 0.0)
+
+
+def test_equivalent_impacts_move_by_the_contact_geometry():
+    """tau / (1 + r) later and |u-| r tau / (1 + r) beyond the wall; nothing moves for
+    an instantaneous impact."""
+    from vidiscover.analysis.flights import FlightData
+
+    fd = FlightData.of(_case(0.006, 0.0, 0.0)[0])
+    fd.tau = np.full(fd.dv.size, 2e-4)
+    eq = fd.equivalent_impacts()
+    r = -fd.u_plus / fd.u_minus
+    ok = np.isfinite(r) & (r >= 0) & (r <= 1)
+    assert ok.mean() > 0.9
+    dt = 2e-4 / (1 + r[ok])
+    np.testing.assert_allclose((eq.t_imp - fd.t_imp)[ok], dt, rtol=1e-9)
+    beyond = np.abs(fd.u_minus[ok]) * r[ok] * dt
+    np.testing.assert_allclose((eq.y_imp - fd.y_imp)[ok],
+                               fd.v_minus[ok] * dt + fd.sign[ok] * beyond, rtol=1e-9)
+    fd.tau = np.zeros(fd.dv.size)
+    still = fd.equivalent_impacts()
+    np.testing.assert_array_equal(still.t_imp, fd.t_imp)
+    np.testing.assert_array_equal(still.y_imp, fd.y_imp)
+
+
+def test_a_law_that_moves_with_the_contact_geometry_is_not_identified():
+    """The pooled mu = 0.1, theta = 1 deg law (identified, instantaneous impacts): told
+    that the contacts lasted 1 ms, the equivalent impacts move the law far beyond its
+    accuracy and it is not identified; with 20 us contacts it stays identified."""
+    from vidiscover.analysis.flights import FlightData
+
+    recs = [FlightData.of(_case(b, 0.1, 1.0)[0]) for b in CLEARANCES]
+    for rec in recs:
+        rec.tau = np.full(rec.dv.size, 1e-3)
+    res = discover_flight_law(recs, n_boot=0)
+    assert not res.identified
+    assert "where in the contact" in res.reason
+    for rec in recs:
+        rec.tau = np.full(rec.dv.size, 2e-5)
+    res = discover_flight_law(recs, n_boot=0)
+    assert res.identified, res.reason
+    assert abs(res.mu - 0.1) < MU_TOL and abs(res.theta_deg - 1.0) < THETA_TOL

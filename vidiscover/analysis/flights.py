@@ -63,6 +63,19 @@ class FlightData:
                      else np.sign(side.astype(float)))
         self.v_minus = np.asarray(imp["v_minus"], float)
         self.v_plus = np.asarray(imp["v_plus"], float)
+        n_imp = self.dv.size
+        self.u_minus = (np.asarray(imp["u_minus"], float) if "u_minus" in imp
+                        else np.full(n_imp, np.nan))
+        self.u_plus = (np.asarray(imp["u_plus"], float) if "u_plus" in imp
+                       else np.full(n_imp, np.nan))
+        # contact duration (s) per impact: the learned pulse's, per wall
+        resp = getattr(det, "response", None)
+        if resp is not None:
+            taus = (float(resp.model_for(1).tau), float(resp.model_for(-1).tau))
+        else:
+            tau = float(getattr(getattr(det, "pulse", None), "tau", 0.0) or 0.0)
+            taus = (tau, tau)
+        self.tau = np.where(self.sign > 0, taus[0], taus[1])
         self.reliable = np.asarray(det.columns["reliable"], bool)
         self.ts = np.asarray(fl["t_start"], float)
         self.te = np.asarray(fl["t_end"], float)
@@ -115,6 +128,30 @@ class FlightData:
             setattr(out, name, val)
         out.ts, out.te = out.t_imp[self.i_s], out.t_imp[self.i_e]
         return out
+
+    def equivalent_impacts(self) -> FlightData:
+        """A copy with every impact at the equivalent impact of its contact.
+
+        A compliant contact of duration ``tau`` is not an impact at its entry: the
+        approach and rebound lines of the relative position meet ``dt = tau / (1 + r)``
+        after the entry, ``dz = |u-| r tau / (1 + r)`` beyond the wall (r = -u+/u-,
+        ``tau`` the learned pulse's contact duration of that wall). The flights
+        between those points are what the weak form's straight-line mean velocities
+        describe; for an instantaneous impact (tau = 0) nothing moves.
+
+        Returns
+        -------
+        FlightData
+        """
+        with np.errstate(divide="ignore", invalid="ignore"):
+            r = -self.u_plus / self.u_minus
+        r = np.where(np.isfinite(r), np.clip(r, 0.0, 1.0), 1.0)
+        tau = np.where(np.isfinite(self.tau), self.tau, 0.0)
+        dt = tau / (1.0 + r)
+        dz = np.nan_to_num(np.abs(self.u_minus)) * r * dt
+        return self.with_impacts(t=self.t_imp + dt,
+                                 y=self.y_imp + np.nan_to_num(self.v_minus) * dt
+                                 + self.sign * dz)
 
     @property
     def n_flights(self) -> int:
