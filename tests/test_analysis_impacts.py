@@ -15,6 +15,7 @@ from analysis_sim import ASYM, CLEARANCES, SEEDS, recording
 from vidiscover import InputError, Metadata, Recording, SensorConfig
 from vidiscover.analysis import (
     DETECTABLE_SNR,
+    DetectionOptions,
     PulseModel,
     detect_impacts,
     detectable,
@@ -215,8 +216,12 @@ def test_all_nan_acceleration_is_an_input_error():
 
 def test_bad_options_name_the_argument():
     rec = _synthetic(np.zeros(500))
-    with pytest.raises(InputError, match="threshold must be > 0"):
-        detect_impacts(rec, threshold=-1)
+    with pytest.raises(InputError, match="detection option threshold must be > 0"):
+        DetectionOptions(threshold=-1)
+    with pytest.raises(InputError, match="fit_halfwidth must be an integer in"):
+        DetectionOptions(fit_halfwidth=2.5)
+    with pytest.raises(InputError, match="options must be a DetectionOptions"):
+        detect_impacts(rec, {"threshold": 6.0})
     with pytest.raises(InputError, match="cutoff must be in"):
         PulseModel(cutoff=0.7)
 

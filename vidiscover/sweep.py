@@ -174,6 +174,10 @@ class SweepSpec:
             raise InputError(f"noise must be >= 0 (a scale factor), was {self.noise!r}")
         if not (isinstance(self.n_boot, (int, np.integer)) and self.n_boot >= 0):
             raise InputError(f"n_boot must be a non-negative integer, was {self.n_boot!r}")
+        if not (isinstance(self.threshold, (int, float)) and math.isfinite(self.threshold)
+                and self.threshold > 0):
+            raise InputError(f"threshold must be > 0 (matched-filter SNR of the impact "
+                             f"detector), was {self.threshold!r}")
         from .simulation.engine import SimOptions
 
         SimOptions(settle=self.settle, duration=self.duration)  # validates both
@@ -235,7 +239,7 @@ def _label_of(predicted: Any) -> str:
 def _run_point(task: tuple[SweepSpec, Callable | None, int]) -> dict:
     """Simulate, record, label and analyse one point (runs on a worker)."""
     # every backend computes the same, explicit feature set
-    from .analysis import analyze
+    from .analysis import DetectionOptions, analyze
     from .regimes.features import ALL_FEATURES
     from .workflows import known_pulse, simulate_to_memory
 
@@ -247,7 +251,7 @@ def _run_point(task: tuple[SweepSpec, Callable | None, int]) -> dict:
                                             duration=spec.duration, noise=noise,
                                             name=f"{spec.param}={value:g}")
     regime = truth.regime
-    ana = analyze(rec, mu=effects.mu, threshold=spec.threshold,
+    ana = analyze(rec, mu=effects.mu, detection=DetectionOptions(threshold=spec.threshold),
                   n_boot=int(spec.n_boot), seed=seed, features=ALL_FEATURES,
                   pulse=known_pulse(None, effects))   # our own default chain: known
     t = ana.detection.t

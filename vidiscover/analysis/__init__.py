@@ -12,7 +12,13 @@
 """
 
 from .friction import eq8_velocities, integrate_flights, solve_flights
-from .impacts import IMPACT_COLUMNS, ImpactDetection, PulseModel, detect_impacts
+from .impacts import (
+                      IMPACT_COLUMNS,
+                      DetectionOptions,
+                      ImpactDetection,
+                      PulseModel,
+                      detect_impacts,
+)
 from .pipeline import AnalysisResult, analyze
 from .reconstruction import FLIGHT_COLUMNS, Reconstruction, reconstruct
 from .restitution import MU_TABLE, RestitutionEstimate, WallStats, estimate_restitution, mu_table
@@ -36,7 +42,8 @@ from .validation import (
 )
 
 __all__ = [
-    "ANALYSIS_FEATURES", "AnalysisResult", "DETECTABLE_SNR", "DetectionScores",
+    "ANALYSIS_FEATURES", "AnalysisResult", "DETECTABLE_SNR", "DetectionOptions",
+    "DetectionScores",
     "FLIGHT_COLUMNS", "FeatureContext", "FeatureSet", "Forcing", "IMPACT_COLUMNS",
     "ImpactDetection", "MU_TABLE",
     "PulseModel", "Reconstruction", "RestitutionEstimate", "ReturnMap", "WallStats",

@@ -62,9 +62,9 @@ import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field, replace
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from ..errors import InputError
 from ..params import G_ACCEL
@@ -82,7 +82,11 @@ from .signals import (
     true_runs,
 )
 
-__all__ = ["PulseModel", "ImpactDetection", "detect_impacts", "IMPACT_COLUMNS"]
+if TYPE_CHECKING:      # pandas is imported where a table is built, not to analyse
+    import pandas as pd
+
+__all__ = ["PulseModel", "ImpactDetection", "DetectionOptions", "detect_impacts",
+           "IMPACT_COLUMNS"]
 
 #: Columns of :attr:`ImpactDetection.table`.
 IMPACT_COLUMNS = ("t", "side", "dv", "area", "snr", "peak", "sample", "reliable",
@@ -220,30 +224,19 @@ class ImpactDetection:
         return self.n_samples / self.sample_rate
 
 
-def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
-                   mu: float = 0.0, baseline_ms: float = 6.4, fit_halfwidth: int = 8,
-                   max_rounds: int = 4, mismatch: float = 0.03,
-                   a_range: float | None = None, b: float | None = None,
-                   max_ball_speed: float = 5.0, fit_width: bool = True) -> ImpactDetection:
-    """Detect impacts as pulses in the LO acceleration (see the module docs).
+@dataclass(frozen=True)
+class DetectionOptions:
+    """The impact detector's settings, one value (checked when made).
 
-    Parameters
+    Attributes
     ----------
-    rec : Recording
-        The recording (``a`` may hold NaN dropouts and clipped samples).
     threshold : float
         Matched-filter SNR a pulse must exceed. Noise-only false alarms on a 5.12 s
         record at 6400 Hz: measured 0.03 per record at 5, about 0.005 at 5.5.
-    pulse : PulseModel or PulseResponse, optional
-        Pulse shape; default: learned from the recording (:func:`.pulse.learn_pulse`;
-        the default linear-phase model, with a warning, when the record has too few
-        strong isolated pulses). ``PulseModel()`` is the exact engine's default sensors.
-    mu : float
-        Friction coefficient assumed by the same-wall (chatter) plausibility check.
     baseline_ms : float
         Window of the smoother of the forced response (ms).
     fit_halfwidth : int
-        Half-width of the pulse-fit window (samples).
+        Half-width of the pulse-fit window (samples, 3-32).
     max_rounds : int
         Detection rounds on the residual.
     mismatch : float
@@ -251,17 +244,82 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
         to strong pulses in later rounds.
     a_range : float, optional
         Known accelerometer range (m/s^2); samples at or beyond it are clipped.
-    b : float, optional
-        Half-clearance (m) for the crossing check; default ``rec.meta.b``.
     max_ball_speed : float
         Fastest plausible ball speed relative to the LO (m/s). Two consecutive
         impacts on opposite walls less than ``2 b / max_ball_speed`` apart are
         impossible (the ball would cross the clearance faster); the weaker pulse of
-        such a pair is dropped as a false alarm (counted in ``warnings``).
+        such a pair is dropped as a false alarm (counted in ``warnings``); 0: no
+        such check.
     fit_width : bool
         For a given :class:`PulseModel`: when the strong pulses are wider than it
         (chi-square of their fit above 1.5), refit with a contact duration ``tau``
         chosen among 0.5-8 samples (the :attr:`ImpactDetection.pulse` then holds it).
+
+    Raises
+    ------
+    InputError
+        On a setting out of its range.
+
+    Examples
+    --------
+    >>> DetectionOptions(threshold=6.0).max_rounds
+    4
+    """
+
+    threshold: float = 5.5
+    baseline_ms: float = 6.4
+    fit_halfwidth: int = 8
+    max_rounds: int = 4
+    mismatch: float = 0.03
+    a_range: float | None = None
+    max_ball_speed: float = 5.0
+    fit_width: bool = True
+
+    def __post_init__(self) -> None:
+        def bad(name, what):
+            raise InputError(f"detection option {name} must be {what}, "
+                             f"was {getattr(self, name)!r}")
+
+        if not (isinstance(self.threshold, (int, float)) and math.isfinite(self.threshold)
+                and self.threshold > 0):
+            bad("threshold", "> 0 (matched-filter SNR)")
+        if not (isinstance(self.fit_halfwidth, (int, np.integer))
+                and 3 <= self.fit_halfwidth <= 32):
+            bad("fit_halfwidth", "an integer in [3, 32] samples")
+        if not (isinstance(self.baseline_ms, (int, float)) and math.isfinite(self.baseline_ms)
+                and self.baseline_ms > 0):
+            bad("baseline_ms", "> 0 ms")
+        if not (isinstance(self.mismatch, (int, float)) and math.isfinite(self.mismatch)
+                and self.mismatch >= 0):
+            bad("mismatch", ">= 0")
+        if not (isinstance(self.max_rounds, (int, np.integer)) and self.max_rounds >= 0):
+            bad("max_rounds", "an integer >= 0")
+        if not (isinstance(self.max_ball_speed, (int, float))
+                and self.max_ball_speed >= 0):
+            bad("max_ball_speed", ">= 0 m/s (0: no check)")
+        if self.a_range is not None and not (isinstance(self.a_range, (int, float))
+                                             and self.a_range > 0):
+            bad("a_range", "None or > 0 m/s^2")
+
+
+def detect_impacts(rec, options: DetectionOptions | None = None, *, pulse=None,
+                   mu: float = 0.0, b: float | None = None) -> ImpactDetection:
+    """Detect impacts as pulses in the LO acceleration (see the module docs).
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (``a`` may hold NaN dropouts and clipped samples).
+    options : DetectionOptions, optional
+        The detector's settings (default ``DetectionOptions()``).
+    pulse : PulseModel or PulseResponse, optional
+        Pulse shape; default: learned from the recording (:func:`.pulse.learn_pulse`;
+        the default linear-phase model, with a warning, when the record has too few
+        strong isolated pulses). ``PulseModel()`` is the exact engine's default sensors.
+    mu : float
+        Friction coefficient assumed by the same-wall (chatter) plausibility check.
+    b : float, optional
+        Half-clearance (m) for the crossing check; default ``rec.meta.b``.
 
     Returns
     -------
@@ -284,15 +342,14 @@ def detect_impacts(rec, *, threshold: float = 5.5, pulse=None,
     if pulse is not None and not isinstance(pulse, (PulseModel, PulseResponse)):
         raise InputError(f"pulse must be a PulseModel, a PulseResponse or None (learn it), "
                          f"was {pulse!r}")
-    if not (math.isfinite(threshold) and threshold > 0):
-        raise InputError(f"threshold must be > 0 (matched-filter SNR), was {threshold!r}")
-    if not (isinstance(fit_halfwidth, (int, np.integer)) and 3 <= fit_halfwidth <= 32):
-        raise InputError(f"fit_halfwidth must be an integer in [3, 32] samples, "
-                         f"was {fit_halfwidth!r}")
-    if not (math.isfinite(baseline_ms) and baseline_ms > 0):
-        raise InputError(f"baseline_ms must be > 0 ms, was {baseline_ms!r}")
-    if not (math.isfinite(mismatch) and mismatch >= 0):
-        raise InputError(f"mismatch must be >= 0, was {mismatch!r}")
+    if options is None:
+        options = DetectionOptions()
+    elif not isinstance(options, DetectionOptions):
+        raise InputError(f"options must be a DetectionOptions, was {options!r}")
+    threshold, baseline_ms, fit_halfwidth = (options.threshold, options.baseline_ms,
+                                             options.fit_halfwidth)
+    max_rounds, mismatch, a_range = options.max_rounds, options.mismatch, options.a_range
+    max_ball_speed, fit_width = options.max_ball_speed, options.fit_width
     fs = check_recording(rec)
     n = rec.n
     a = rec.a

@@ -21,7 +21,7 @@ import numpy as np
 
 from .._atomic import to_jsonable
 from ..errors import InputError
-from .impacts import ImpactDetection, detect_impacts
+from .impacts import DetectionOptions, ImpactDetection, detect_impacts
 from .pulse import PulseModel, PulseResponse
 from .reconstruction import Reconstruction, reconstruct
 from .restitution import MU_TABLE, RestitutionEstimate, estimate_restitution, mu_table
@@ -121,7 +121,7 @@ class AnalysisResult:
                         "left": int((side == "left").sum()), "noise": det.noise,
                         "unreliable": int((~det.columns["reliable"]).sum())},
             "restitution": {"mu": self.restitution.mu,
-                            "confidence": self.restitution.confidence,
+                            "level": self.restitution.level,
                             "right": self.restitution.right.to_dict(),
                             "left": self.restitution.left.to_dict()},
             "flights": {"n": int(fc["t_start"].size),
@@ -168,7 +168,8 @@ class AnalysisResult:
                         recon=self.reconstruction)
 
 
-def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 5.5,
+def analyze(rec, mu: float = 0.0, *, b: float | None = None,
+            detection: DetectionOptions | None = None,
             n_boot: int = 1000, seed: int = 0, flight_law=None,
             pulse: PulseModel | PulseResponse | None = None, offsets: bool = True,
             features=None) -> AnalysisResult:
@@ -182,8 +183,9 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 
         Friction coefficient assumed between ball and LO (paper eq. 8).
     b : float, optional
         Half-clearance (m); default ``rec.meta.b``.
-    threshold : float
-        Impact detection threshold (matched-filter SNR).
+    detection : DetectionOptions, optional
+        The impact detector's settings (threshold, smoother window, ...; default
+        :class:`~vidiscover.analysis.impacts.DetectionOptions`).
     n_boot : int
         Bootstrap resamples of the restitution confidence intervals.
     seed : int
@@ -229,7 +231,7 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None, threshold: float = 
     if not (isinstance(mu, (int, float)) and math.isfinite(mu) and 0 <= mu <= 2):
         raise InputError(f"mu must be in [0, 2] (friction coefficient), was {mu!r}")
     b = float(rec.meta.b if b is None else b)
-    det = detect_impacts(rec, threshold=threshold, mu=mu, b=b,      # checks the recording
+    det = detect_impacts(rec, detection, mu=mu, b=b,                # checks the recording
                          pulse=pulse)
     forcing = fit_forcing(rec.t, rec.xe, rec.meta.frequency)
     off = Offsets()
