@@ -114,8 +114,8 @@ def test_implausible_r_is_not_used():
 
 def test_bad_arguments():
     out, _ = analysed(0.009)
-    with pytest.raises(InputError, match="confidence must be in"):
-        estimate_restitution(out.reconstruction, confidence=1.5)
+    with pytest.raises(InputError, match="level .of the confidence interval. must be in"):
+        estimate_restitution(out.reconstruction, level=1.5)
     with pytest.raises(InputError, match="side must be"):
         out.restitution.wall("middle")
 

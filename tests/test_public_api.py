@@ -29,3 +29,20 @@ def test_cli_import_stays_light():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == "[]"
+
+
+def test_analysing_a_recording_does_not_load_pandas():
+    """Sweep and gap workers analyse thousands of recordings and build no table: the
+    analysis imports pandas only where it builds a DataFrame (worker start-up cost)."""
+    code = ("import sys\n"
+            "from vidiscover.analysis import PulseModel, analyze\n"
+            "from vidiscover.params import preset\n"
+            "from vidiscover.regimes.features import ALL_FEATURES\n"
+            "from vidiscover.workflows import simulate_to_memory\n"
+            "rec, _, _ = simulate_to_memory(preset('paper'), settle=1.0, duration=1.0)\n"
+            "an = analyze(rec, n_boot=0, pulse=PulseModel(), features=ALL_FEATURES)\n"
+            "print('pandas' in sys.modules, an.impact_table.shape[0] == an.detection.n, "
+            "'pandas' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "False True True"        # loaded by the first table, not before

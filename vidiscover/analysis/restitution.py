@@ -49,15 +49,18 @@ import functools
 import math
 from collections.abc import Mapping
 from dataclasses import asdict, dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
-import pandas as pd
 
 from ..errors import InputError
 from ..params import G_ACCEL
 from ._table import check_columns, to_frame
 from .impacts import ImpactDetection
 from .reconstruction import Reconstruction, reconstruct, refly
+
+if TYPE_CHECKING:      # pandas is imported where a table is built, not to analyse
+    import pandas as pd
 
 __all__ = ["WallStats", "RestitutionEstimate", "estimate_restitution", "mu_table",
            "RESTITUTION_COLUMNS", "MU_TABLE", "VELOCITY_FLOOR", "SIDES", "R_MAX"]
@@ -128,7 +131,7 @@ class RestitutionEstimate:
     right, left : WallStats
     mu : float
         Friction coefficient assumed.
-    confidence : float
+    level : float
         Level of the bootstrap intervals.
     """
 
@@ -136,7 +139,7 @@ class RestitutionEstimate:
     right: WallStats
     left: WallStats
     mu: float
-    confidence: float = 0.95
+    level: float = 0.95
 
     def __post_init__(self) -> None:
         check_columns(self.columns, RESTITUTION_COLUMNS, "RestitutionEstimate")
@@ -155,7 +158,7 @@ class RestitutionEstimate:
 
 def estimate_restitution(recon: Reconstruction, det: ImpactDetection | None = None, *,
                          max_rel_error: float = 0.1, slow_ratio: float = 0.25,
-                         n_boot: int = 1000, confidence: float = 0.95, seed: int = 0
+                         n_boot: int = 1000, level: float = 0.95, seed: int = 0
                          ) -> RestitutionEstimate:
     """Restitution coefficient of every impact (eq. 9) and per-wall statistics.
 
@@ -171,7 +174,7 @@ def estimate_restitution(recon: Reconstruction, det: ImpactDetection | None = No
         Friction-ratio limit above which a wall's estimate is flagged.
     n_boot : int
         Bootstrap resamples for the confidence interval of the RMS (0: none).
-    confidence : float
+    level : float
         Level of the interval.
     seed : int
         Seed of the bootstrap.
@@ -180,8 +183,9 @@ def estimate_restitution(recon: Reconstruction, det: ImpactDetection | None = No
     -------
     RestitutionEstimate
     """
-    if not 0 < confidence < 1:
-        raise InputError(f"confidence must be in (0, 1), was {confidence!r}")
+    if not 0 < level < 1:
+        raise InputError(f"level (of the confidence interval) must be in (0, 1), "
+                         f"was {level!r}")
     if not max_rel_error > 0:
         raise InputError(f"max_rel_error must be > 0, was {max_rel_error!r}")
     if not (isinstance(n_boot, (int, np.integer)) and n_boot >= 0):
@@ -227,14 +231,14 @@ def estimate_restitution(recon: Reconstruction, det: ImpactDetection | None = No
     for name, s in (("right", 1.0), ("left", -1.0)):
         sel = used & (sgn == s)
         walls[name] = _wall_stats(name, r[sel], int((sgn == s).sum()), rho[sel],
-                                  slow_ratio, n_boot, confidence, rng)
+                                  slow_ratio, n_boot, level, rng)
     cols = {"t": ic["t"], "side": side, "r": r, "u_minus": u_m, "u_plus": u_p,
             "rel_error": rel, "friction_ratio": rho, "status": status, "used": used}
     return RestitutionEstimate(columns=cols, right=walls["right"], left=walls["left"],
-                               mu=float(recon.mu), confidence=float(confidence))
+                               mu=float(recon.mu), level=float(level))
 
 
-def _wall_stats(name, r, n_total, rho, slow_ratio, n_boot, confidence, rng) -> WallStats:
+def _wall_stats(name, r, n_total, rho, slow_ratio, n_boot, level, rng) -> WallStats:
     n = int(r.size)
     nan = float("nan")
     if n == 0:
@@ -247,7 +251,7 @@ def _wall_stats(name, r, n_total, rho, slow_ratio, n_boot, confidence, rng) -> W
         idx = rng.integers(0, n, size=(int(n_boot), n),
                            dtype=np.int16 if n < 2 ** 15 else np.int64)
         boot = np.sort(np.sqrt(r2[idx].mean(axis=1)))
-        q = (1 - confidence) / 2
+        q = (1 - level) / 2
         lo, hi = (_quantile_sorted(boot, p) for p in (q, 1 - q))
     ratio = float(np.nanmedian(rho)) if np.isfinite(rho).any() else 0.0
     return WallStats(name, n, n_total, float(np.mean(r)), float(np.median(r)), rms,
@@ -310,4 +314,6 @@ def mu_table(det: ImpactDetection, rec, mus=MU_TABLE, *, b: float | None = None,
             row.update({f"{side}_rms": w.rms, f"{side}_n": w.n,
                         f"{side}_ratio": w.friction_ratio, f"{side}_warn": w.warn_slow})
         rows.append(row)
+    import pandas as pd
+
     return pd.DataFrame(rows)

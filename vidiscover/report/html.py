@@ -230,7 +230,7 @@ def render_report(summary: Mapping, *, figures: Mapping[str, bytes] | None = Non
         parts.append('<p class="ok">None.</p>')
     # --- restitution
     parts.append("<h2>Restitution per wall (eq. 9, RMS with "
-                 f"{fmt(100 * (rest.get('confidence') or 0.95), 3)} % bootstrap CI)</h2>")
+                 f"{fmt(100 * (rest.get('level') or 0.95), 3)} % bootstrap CI)</h2>")
     header = ["wall", "used", "detected", "mean", "median", "RMS [CI]", "std",
               "friction ratio", "too slow"]
     if truth:
