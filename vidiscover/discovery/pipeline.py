@@ -48,7 +48,7 @@ import numpy as np
 import pandas as pd
 
 from .._atomic import to_jsonable
-from ..analysis import AnalysisResult, analyze
+from ..analysis import AnalysisResult, DetectionOptions, analyze
 from ..errors import InputError
 from ..recording import Recording
 from .flight_law import MAX_TILT_DEG
@@ -219,7 +219,7 @@ def _as_items(items) -> list:
     return out
 
 
-def _analysis_of(item, mu: float, threshold: float, meta) -> AnalysisResult:
+def _analysis_of(item, mu: float, detection, meta) -> AnalysisResult:
     """The analysis of one input (analysed here unless it already is)."""
     if isinstance(item, AnalysisResult):
         return item
@@ -230,7 +230,7 @@ def _analysis_of(item, mu: float, threshold: float, meta) -> AnalysisResult:
     if not isinstance(item, Recording):
         raise InputError(f"discover: each input must be a path, a Recording or an "
                          f"AnalysisResult, got {type(item).__name__}")
-    return analyze(item, mu=mu, threshold=threshold, n_boot=0)
+    return analyze(item, mu=mu, detection=detection, n_boot=0)
 
 
 def _instrument_of(analysis: AnalysisResult):
@@ -280,7 +280,8 @@ def _flight_law(analyses, seed: int, n_boot: int, level: float, max_tilt_deg: fl
 def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
              level: float = 0.95, criterion: str = "aicc",
              terms: Sequence[str] | None = None, min_effect: float = MIN_EFFECT,
-             max_tilt_deg: float = MAX_TILT_DEG, threshold: float = 5.5, meta=None,
+             max_tilt_deg: float = MAX_TILT_DEG, detection: DetectionOptions | None = None,
+             meta=None,
              flight: bool = True, flight_kws: Mapping | None = None,
              impact_kws: Mapping | None = None, refine_mu: bool = True,
              progress: bool = False) -> DiscoveryResult:
@@ -310,8 +311,9 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
         speed dependence (default :data:`~vidiscover.discovery.impact_law.MIN_EFFECT`).
     max_tilt_deg : float, optional
         Largest admissible |theta| of the flight law (deg).
-    threshold : float, optional
-        Impact detection threshold of the analyses.
+    detection : DetectionOptions, optional
+        The impact detector's settings for the recordings analysed here (default
+        :class:`~vidiscover.analysis.DetectionOptions`).
     meta : path-like, dict or Metadata, optional
         Metadata for paths without a sidecar JSON (applied to every path).
     flight : bool, optional
@@ -355,7 +357,7 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
         from tqdm import tqdm
 
         items = tqdm(items, desc="analyse", unit="rec")
-    analyses = tuple(_analysis_of(it, mu, threshold, meta) for it in items)
+    analyses = tuple(_analysis_of(it, mu, detection, meta) for it in items)
     warnings = [f"{a.name}: {w}" for a in analyses for w in a.warnings]
     flight_result = None
     if flight:
@@ -377,7 +379,7 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
         if (all(r is not None for r in recs)
                 and ((mu_id > 0 and abs(mu_id - mu) > 0.005) or theta_id)):
             mu_impacts, theta_impacts = min(max(mu_id, 0.0), 2.0), theta_id
-            analyses = tuple(analyze(r, threshold=threshold, n_boot=0,
+            analyses = tuple(analyze(r, detection=detection, n_boot=0,
                                      flight_law=(mu_impacts, theta_id),
                                      pulse=_instrument_of(a))
                              for r, a in zip(recs, analyses))
