@@ -161,3 +161,29 @@ def test_a_direct_estimate_joins_the_grid_of_a_1d_search():
     # an estimate outside the range or undefined is ignored
     assert _minimise_1d(gap, 0.0, 0.6, n_grid=7, extra=float("nan")) == pytest.approx(
         0.1, abs=0.03)
+
+
+def test_an_interval_is_never_narrower_than_the_direct_statistics_resolution(monkeypatch):
+    import math
+    from types import SimpleNamespace
+
+    from vidiscover.gap import fit as gapfit
+    from vidiscover.gap.components import STATS
+
+    # a gap far sharper in the walls than r_level resolves (an attractor near a
+    # bifurcation) and a flat-ish one in nothing else
+    def gap_of(model, fx, _fx):
+        p = fx.active["asymmetric_restitution"]
+        return SimpleNamespace(total=1e6 * (p["r_right"] - 0.8) ** 2
+                               + 1e2 * (p["r_left"] - 0.4) ** 2)
+
+    monkeypatch.setattr(gapfit, "simulate_signature", lambda model, fx, r=None: fx)
+    monkeypatch.setattr(gapfit, "gap_of", gap_of)
+    fx = Effects.parse(["asymmetric_restitution=0.8,0.4"])
+    fit = CandidateFit(name="asymmetric_restitution", params=dict(fx.active[
+        "asymmetric_restitution"]), n_params=2, r=0.7, effects=fx, gap=None, signature=None)
+    ci = gapfit.profile_ci(SimpleNamespace(real=None), fit)
+    m = math.sqrt(3.84) * STATS["right.r_level"][1]
+    assert ci["r_right"] == pytest.approx([0.8 - m, 0.8 + m])          # floor: 0.0196
+    half = math.sqrt(3.84 / 1e2)                                        # curvature: 0.196
+    assert ci["r_left"] == pytest.approx([0.4 - half, 0.4 + half], rel=1e-6)
