@@ -275,7 +275,7 @@ def _run_point(task: tuple[SweepSpec, Callable | None, int]) -> dict:
 
 def _is_batch_model(classify) -> bool:
     """True for a regime model that labels a feature table at once (``RegimeModel``)."""
-    return (classify is not None and callable(getattr(classify, "predict", None))
+    return (classify is not None and callable(getattr(classify, "decide", None))
             and hasattr(classify, "feature_names"))
 
 
@@ -365,7 +365,9 @@ def sweep(param: str, values: Sequence[float], *, base: SystemParams | None = No
                         progress=progress, desc=f"sweep {param}")
     df = pd.DataFrame(rows)
     if batch is not None and len(df):
-        df["label_pred"] = [str(v) for v in batch.predict(df)]
+        # the labels `classify` gives (the rules' where the model keeps them), not the
+        # classifier's alone
+        df["label_pred"] = [str(v) for v in batch.decide(df)[0]]
     df.attrs["sweep"] = spec.to_dict()
     return df
 
