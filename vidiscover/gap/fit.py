@@ -479,7 +479,9 @@ def _fit_inclination(model: Model, base: Effects):
     # flight time; the attractor can jump between nearby angles, so the search
     # stays within +/- 2.5 deg of it (the full range when it is not available)
     v, ft = model.real.values, model.real.flight_time
-    e = np.nanmean([v.get("right.momentum", math.nan), v.get("left.momentum", math.nan)])
+    walls = [m for m in (v.get("right.momentum", math.nan), v.get("left.momentum", math.nan))
+             if np.isfinite(m)]
+    e = float(np.mean(walls)) if walls else math.nan       # no wall: no closed-form start
     if np.isfinite(e) and np.isfinite(ft) and ft > 0:
         th0 = math.degrees(math.asin(float(np.clip(e / (G_ACCEL * ft), -0.5, 0.5))))
         return _fit_1d(model, base, "inclination", "theta", max(th0 - 2.5, -30.0),
