@@ -127,3 +127,25 @@ def test_help_states_the_default_min_effect_in_use():
 
     out = CliRunner().invoke(main, ["discover", "--help"]).output
     assert f"default: {MIN_EFFECT:g}," in " ".join(out.split())
+
+
+@pytest.mark.parametrize("flag, want", [([], None), (["--rising"], {"rising": True})])
+def test_rising_laws_are_asked_for_on_the_command_line(recordings, tmp_path, monkeypatch,
+                                                       flag, want):
+    """`--rising` reaches the impact-law fit; without it, rising laws stay unreported."""
+    import vidiscover.discovery as discovery
+
+    seen = {}
+    real = discovery.discover
+
+    def spy(*args, **kw):
+        seen["impact_kws"] = kw.get("impact_kws")
+        return real(*args, **kw)
+
+    monkeypatch.setattr(discovery, "discover", spy)
+    res = CliRunner().invoke(main, ["discover", str(recordings[0]), "--out",
+                                    str(tmp_path / "d"), "--n-boot", "0", "--no-figures",
+                                    "--no-flight", "--json", *flag])
+    assert res.exit_code == 0, res.output
+    assert seen["impact_kws"] == want
+    assert "--rising" in CliRunner().invoke(main, ["discover", "--help"]).output

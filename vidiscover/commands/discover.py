@@ -45,7 +45,8 @@ def run_discover(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
                  seed: int = 0, n_boot: int = 200, level: float = 0.95,
                  criterion: str = "aicc", min_effect: float | None = None,
                  max_tilt: float = 10.0, flight: bool = True, figures: bool = True,
-                 progress: bool = False, channels: dict | None = None) -> dict:
+                 progress: bool = False, channels: dict | None = None,
+                 rising: bool = False) -> dict:
     """Discover the laws of pooled recordings and write the results (in-process CLI).
 
     Parameters
@@ -80,6 +81,10 @@ def run_discover(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
         Show a progress bar on stderr.
     channels : dict, optional
         Our names -> the recordings' column/channel names (``--channels``).
+    rising : bool
+        Also report impact laws in which r rises with speed (``--rising``; they must
+        then clear 4x the reporting threshold). Off by default: no contact law rises,
+        while the systematic errors of slow impacts make r look as if it did.
 
     Returns
     -------
@@ -121,7 +126,8 @@ def run_discover(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
     recordings = [read_recording(p, meta=meta, channels=channels) for p in paths]
     result = discover_laws(recordings, mu=mu, seed=seed, n_boot=n_boot, level=level,
                            criterion=criterion, flight=flight, progress=progress,
-                           min_effect=float(min_effect), max_tilt_deg=float(max_tilt))
+                           min_effect=float(min_effect), max_tilt_deg=float(max_tilt),
+                           impact_kws={"rising": True} if rising else None)
     doc = result.summary()
     files = ["discovery.json", "equations.txt", "impacts.csv", "candidates_right.csv",
              "candidates_left.csv", "flight_residuals.csv"]
@@ -196,12 +202,16 @@ def human_lines(doc: dict) -> list[str]:
 @click.option("--max-tilt", type=float, default=10.0, show_default=True,
               help="Largest admissible |theta| of the flight law (deg).")
 @channels_option
+@click.option("--rising", is_flag=True,
+              help="Also report impact laws in which r rises with speed (at 4x the "
+                   "threshold). Off by default: no contact law rises, while systematic "
+                   "errors of slow impacts look like it.")
 @click.option("--no-flight", is_flag=True, help="Skip the flight-law discovery.")
 @click.option("--no-figures", is_flag=True, help="Skip the figures (faster).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document.")
 @handle_errors
 def discover(recordings, out, mu, meta, seed, n_boot, level, criterion, min_effect, max_tilt,
-             channels, no_flight, no_figures, as_json):
+             channels, rising, no_flight, no_figures, as_json):
     """Discover the flight law and the impact law per wall from pooled recordings.
 
     RECORDINGS are CSV/Parquet/NPZ files with columns t, x, a, xe and a metadata
@@ -212,5 +222,6 @@ def discover(recordings, out, mu, meta, seed, n_boot, level, criterion, min_effe
     doc = run_discover(recordings, out, mu=mu, meta=meta, seed=seed, n_boot=n_boot,
                        level=level, criterion=criterion, min_effect=min_effect,
                        max_tilt=max_tilt, flight=not no_flight, figures=not no_figures,
-                       progress=not as_json and len(recordings) > 1, channels=channels)
+                       progress=not as_json and len(recordings) > 1, channels=channels,
+                       rising=rising)
     emit(as_json, doc, "\n".join(human_lines(doc)))
