@@ -306,6 +306,7 @@ class _Objective:
         self.n_sims += 1
         if not fit.any():
             return sig, fx_try
+        g = None                                  # the gap of (sig, fx_try), when needed
         for _ in range(WALL_STEPS):
             got = np.array(_wall_levels(sig))
             miss = np.where(fit & np.isfinite(got), want - got, 0.0)
@@ -313,23 +314,25 @@ class _Objective:
                 break
             off = (self.offset[0] + miss[0], self.offset[1] + miss[1])
             fx2 = _shift_walls(fx, *off)
-            g = gap_of(self.model, sig, fx_try).total
+            if g is None:
+                g = gap_of(self.model, sig, fx_try).total
             sig2 = simulate_signature(self.model, fx2, self.r0)
             self.n_sims += 1
-            if gap_of(self.model, sig2, fx2).total > g:
+            g2 = gap_of(self.model, sig2, fx2).total
+            if g2 > g:
                 # unequal walls near a bifurcation: the corrected walls may have
                 # another attractor beside the recording's; the ball started as in
                 # the runner-up nominal draw may find it
                 sig3 = simulate_signature(self.model, fx2, self.r0,
                                           ball_speed=self.model.alt_speed)
                 self.n_sims += 1
-                if gap_of(self.model, sig3, fx2).total < gap_of(self.model, sig2, fx2).total:
-                    sig2 = sig3
+                g3 = gap_of(self.model, sig3, fx2).total
+                if g3 < g2:
+                    sig2, g2 = sig3, g3
             # keep the corrected walls unless they left the recording's attractor
-            if not (gap_of(self.model, sig2, fx2).total <= g
-                    or not np.all(np.isfinite(_wall_levels(sig)))):
+            if not (g2 <= g or not np.all(np.isfinite(_wall_levels(sig)))):
                 break
-            self.offset, sig, fx_try = off, sig2, fx2
+            self.offset, sig, fx_try, g = off, sig2, fx2, g2
         return sig, fx_try
 
     def __call__(self, theta: float) -> float:
