@@ -465,6 +465,7 @@ class _Objective:
         self.index = (np.arange(-pre, post + 1)[None, :] + pre) * res - steps[:, None] \
             + steps.max()
         self.nu = int(self.index.max()) + 1
+        self._rows: dict = {}          # (kind, order, halfwidth) -> {model: response row}
 
     @property
     def two_walls(self) -> bool:
@@ -511,6 +512,28 @@ class _Objective:
     def __call__(self, models) -> float:
         return self.fit(models)[0]
 
+    def _responses(self, kind, order, halfwidth, cs, ts, ss, pp, mm, zz, ref) -> np.ndarray:
+        """Rows of :func:`pulse_responses` on the shift grid, each model computed once.
+
+        The refinement's grids overlap (their centres, the points of a grid moved to
+        its edge, the coarse grid's families again): a row is a function of its model
+        alone (elementwise, and reductions along the row), so rows computed before are
+        reused as they are and the others are computed together, the same values.
+        """
+        u = self.u0 + np.arange(self.nu) * self.step
+        cache = self._rows.setdefault((kind, int(order), int(halfwidth)), {})
+        keys = [r.tobytes() for r in np.column_stack([cs, ts, ss, pp, mm, zz, ref])]
+        new = [i for i, k in enumerate(keys) if k not in cache]
+        if new:
+            n = np.asarray(new)
+            mn = mm[n]
+            Gn = pulse_responses(u[None, :] + ref[n, None], kind, order, cs[n], ts[n],
+                                 halfwidth, ss[n], pp[n], mn if (mn > 0).any() else None,
+                                 zz[n])
+            for i, row in zip(new, Gn):
+                cache[keys[i]] = row
+        return np.stack([cache[k] for k in keys])
+
     def grid(self, kind: str, order: int, cutoffs: np.ndarray, taus: np.ndarray,
              groups, halfwidth: int, skews: np.ndarray | None = None,
              phases: np.ndarray | None = None, mount: tuple[float, float] = (0.0, 0.02),
@@ -542,9 +565,7 @@ class _Objective:
         _, first, inv = np.unique(np.column_stack([cs, ts, ss, pp, mm, zz]), axis=0,
                                   return_index=True, return_inverse=True)
         cs, ts, ss, pp, mm, zz, ref = (v[first] for v in (cs, ts, ss, pp, mm, zz, ref))
-        u = self.u0 + np.arange(self.nu) * self.step
-        G = pulse_responses(u[None, :] + ref[:, None], kind, order, cs, ts, halfwidth, ss, pp,
-                            mm if (mm > 0).any() else None, zz)
+        G = self._responses(kind, order, halfwidth, cs, ts, ss, pp, mm, zz, ref)
         K = G[:, self.index[::stride]]                               # (M, S, W)
         K = K - (K @ self.Q) @ self.Q.T
         kk = np.einsum("msw,msw->ms", K, K)
