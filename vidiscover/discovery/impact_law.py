@@ -246,12 +246,27 @@ class _Design:
     factor); every RSS is a weighted RSS.
     """
 
-    def __init__(self, v: np.ndarray, names: Sequence[str], sw: np.ndarray) -> None:
+    def __init__(self, v: np.ndarray, names: Sequence[str], sw: np.ndarray,
+                 grid: np.ndarray | None = None) -> None:
         self.v = np.abs(v)
         self.theta = library_matrix(self.v, names, IMPACT_TERMS)
         self.sw = sw
         self.col = {nm: j for j, nm in enumerate(names)}
         self.alpha_max = 50.0 / max(float(np.max(self.v, initial=0.0)), 1e-9)
+        # the fits of every candidate on every resample share these (computed once)
+        self.xw = self.theta * sw[:, None]
+        self.hc_start = np.concatenate([[0.0], np.geomspace(1e-4, 1.0, 14) * self.alpha_max])
+        self.grid = grid
+        if grid is not None:   # the library at the effect grid (curves) and its ranges
+            self.gtheta = np.stack([IMPACT_TERMS[t](grid) for t in names], axis=-1)
+            self.gptp = {t: float(np.ptp(self.gtheta[:, j])) for t, j in self.col.items()}
+        self._idx: dict = {}
+
+    def _cols(self, terms: tuple[str, ...]) -> list[int]:
+        idx = self._idx.get(terms)
+        if idx is None:
+            idx = self._idx[terms] = [self.col[t] for t in terms]
+        return idx
 
     @staticmethod
     def _hc(x: np.ndarray) -> np.ndarray:
@@ -281,6 +296,40 @@ class _Design:
         rss = float(np.sum((y - X @ coef) ** 2))
         return (np.concatenate(([1.0], coef)) if cand.fixed_intercept else coef), rss
 
+    def fit_all(self, cands: Sequence[_Candidate], r: np.ndarray,
+                rows=None) -> list[tuple[np.ndarray, float]]:
+        """``[self.fit(c, r, rows) for c in cands]`` with the rows taken once.
+
+        The same arithmetic as :meth:`fit` (the weighted columns are the same
+        products, the same least-squares calls): identical results, without slicing
+        the library and weighting it again for every candidate.
+        """
+        if rows is None:
+            v, rr, sw, xw = self.v, r, self.sw, self.xw
+        else:
+            v, rr, sw = self.v[rows], r[rows], self.sw[rows]
+            xw = self.theta[rows] * sw[:, None]
+        y_free, y_fixed = rr * sw, (rr - 1.0) * sw
+        out = []
+        for cand in cands:
+            if cand.hunt_crossley:
+                out.append(self._fit_hc(v, rr, sw))
+                continue
+            X = xw[:, self._cols(cand.terms)]
+            y = y_fixed if cand.fixed_intercept else y_free
+            coef = np.linalg.lstsq(X, y, rcond=None)[0]
+            rss = float(np.sum((y - X @ coef) ** 2))
+            out.append(((np.concatenate(([1.0], coef)) if cand.fixed_intercept else coef),
+                        rss))
+        return out
+
+    def curve(self, cand: _Candidate, coef: np.ndarray) -> np.ndarray:
+        """:meth:`predict` at the effect grid (the library there is tabulated)."""
+        if cand.hunt_crossley:
+            return self._hc(coef[0] * self.grid)
+        # C order, as predict's stacked columns (the product sums in the same order)
+        return np.ascontiguousarray(self.gtheta[:, self._cols(cand.r_terms)]) @ coef
+
     def _fit_hc(self, v, r, sw) -> tuple[np.ndarray, float]:
         """``alpha`` of ``r = r_HC(alpha v)`` by weighted nonlinear least squares."""
         from scipy.optimize import minimize_scalar
@@ -288,8 +337,10 @@ class _Design:
         def rss(a):
             return float(np.sum((sw * (r - self._hc(a * v))) ** 2))
 
-        grid = np.concatenate([[0.0], np.geomspace(1e-4, 1.0, 14) * self.alpha_max])
-        k = int(np.argmin([rss(a) for a in grid]))
+        grid = self.hc_start
+        # the RSS at every start value at once (row sums: the same as one by one)
+        k = int(np.argmin(np.sum((sw * (r - self._hc(np.multiply.outer(grid, v)))) ** 2,
+                                 axis=1)))
         lo, hi = grid[max(k - 1, 0)], grid[min(k + 1, grid.size - 1)]
         if hi > lo:
             a = float(minimize_scalar(rss, bounds=(lo, hi), method="bounded",
@@ -379,7 +430,7 @@ def _rising(curves: np.ndarray) -> np.ndarray:
 
 
 def _cancelling(cands: Sequence[_Candidate], coefs: Sequence[np.ndarray], grid: np.ndarray,
-                effects: np.ndarray) -> np.ndarray:
+                effects: np.ndarray, ptp: dict | None = None) -> np.ndarray:
     """Candidates whose speed-dependent terms cancel each other over ``grid``.
 
     Over a few tenths of m/s the columns ``v^0.2`` and ``v^0.25`` (say) are nearly
@@ -392,7 +443,8 @@ def _cancelling(cands: Sequence[_Candidate], coefs: Sequence[np.ndarray], grid: 
         terms = [(t, k) for t, k in zip(c.r_terms, coef, strict=True) if t != CONSTANT_TERM]
         if len(terms) < 2 or c.hunt_crossley:
             continue
-        own = sum(abs(k) * float(np.ptp(IMPACT_TERMS[t](grid))) for t, k in terms)
+        own = sum(abs(k) * (ptp[t] if ptp is not None else float(np.ptp(IMPACT_TERMS[t](grid))))
+                  for t, k in terms)
         out[i] = own > _CANCELLATION * max(float(effects[i]), 1e-12)
     return out
 
@@ -734,7 +786,8 @@ def discover_impact_law(v, r, *, seed: int = 0, n_boot: int = 200, groups=None,
                          "spread is mostly the noise of v, which makes r appear to fall with "
                          "it; constant r reported, speed dependence not identifiable",
                          **common)
-    design = _Design(v, names, sw)
+    grid = np.quantile(v, _EFFECT_GRID)
+    design = _Design(v, names, sw, grid)
     nested = _nested(names)
     swept = _sweep(design.theta, r, sw, names, max_terms)
     order = {nm: j for j, nm in enumerate(names)}
@@ -744,20 +797,19 @@ def discover_impact_law(v, r, *, seed: int = 0, n_boot: int = 200, groups=None,
     source = ["nested+sweep" if c in swept else "nested" for c in nested] + \
         ["sweep"] * (len(cands) - len(nested))
     folds = _folds(n, n_folds, g, rng)
-    grid = np.quantile(v, _EFFECT_GRID)
 
     def score(rows=None):
         m = n if rows is None else len(rows)
-        fits = [design.fit(c, r, rows) for c in cands]
+        fits = design.fit_all(cands, r, rows)
         rss = np.array([f[1] for f in fits])
         aicc = np.array([_aicc(s, m, c.n_params) for s, c in zip(rss, cands, strict=True)])
         if criterion == "cv" or rows is None:
             cvs = np.array([design.cv(c, r, folds, rows) for c in cands])
         else:
             cvs = np.full((len(cands), 3), np.nan)
-        curves = np.array([design.predict(c, f[0], grid)
-                           for c, f in zip(cands, fits, strict=True)])
-        aicc[_cancelling(cands, [f[0] for f in fits], grid, np.ptp(curves, axis=1))] = np.inf
+        curves = np.array([design.curve(c, f[0]) for c, f in zip(cands, fits, strict=True)])
+        aicc[_cancelling(cands, [f[0] for f in fits], grid, np.ptp(curves, axis=1),
+                         design.gptp)] = np.inf
         best = int(np.argmin(aicc))
         w = sw ** 2 if rows is None else sw[rows] ** 2
         precision = math.sqrt(rss[best] / float(np.sum(w)))
@@ -769,9 +821,9 @@ def discover_impact_law(v, r, *, seed: int = 0, n_boot: int = 200, groups=None,
             e_ends = _change_error(vv, sig if rows is None else sig[rows], resid,
                                    cands[best].n_params)
         threshold = _effect_threshold(min_effect, precision, e_ends)
-        return rss, aicc, cvs, curves, threshold, precision, e_ends
+        return rss, aicc, cvs, curves, threshold, precision, e_ends, fits
 
-    rss, aicc, cvs, curves, threshold, precision, ends = score()
+    rss, aicc, cvs, curves, threshold, precision, ends, _ = score()
     effects = np.ptp(curves, axis=1)
     tiers = np.array([_tier(c, frozenset(nested)) for c in cands])
     best = _select(cands, tiers, aicc, cvs[:, 1], cvs[:, 2], criterion, aicc_window,
@@ -782,8 +834,8 @@ def discover_impact_law(v, r, *, seed: int = 0, n_boot: int = 200, groups=None,
     boot = np.empty((n_boot, len(chosen.r_terms)))
     picks = np.zeros(len(cands))
     for b, rows in enumerate(bootstrap_rows(n, n_boot, rng)):
-        boot[b] = design.fit(chosen, r, rows)[0]
-        _, a_b, c_b, k_b, t_b, _, _ = score(rows)
+        _, a_b, c_b, k_b, t_b, _, _, fits_b = score(rows)
+        boot[b] = fits_b[best][0]   # the chosen candidate's refit on the resample
         picks[_select(cands, tiers, a_b, c_b[:, 1], c_b[:, 2], criterion,
                       aicc_window, k_b, t_b, min_effect / 2, rising_factor)] += 1
     freq = picks / n_boot if n_boot else np.full(len(cands), np.nan)
