@@ -128,9 +128,7 @@ def _linkage_clusters(points: np.ndarray, radius: float):
     if n == 1:
         return np.zeros(1, dtype=np.int64), points.copy()
     if n <= 2000 and radius > 0:
-        from scipy.cluster.hierarchy import fcluster, linkage
-
-        labels = fcluster(linkage(points, method="single"), radius, criterion="distance") - 1
+        labels = _single_linkage_labels(points, radius) - 1
     else:
         cells = np.floor(points / max(radius, 1e-300)).astype(np.int64)
         labels = np.unique(cells, axis=0, return_inverse=True)[1].ravel()
@@ -140,6 +138,32 @@ def _linkage_clusters(points: np.ndarray, radius: float):
     centres = np.column_stack([np.bincount(labels, points[:, 0], k) / counts,
                                np.bincount(labels, points[:, 1], k) / counts])
     return labels, centres
+
+
+def _single_linkage_labels(points: np.ndarray, radius: float) -> np.ndarray:
+    """``fcluster(linkage(points, "single"), radius, "distance")`` without the checks.
+
+    scipy's public functions validate the linkage matrix they made themselves (about
+    half their time on a few hundred points); the same compiled steps are called
+    directly when this scipy has them (same labels), else the public functions.
+    """
+    from scipy.spatial.distance import pdist
+
+    n = points.shape[0]
+    try:
+        from scipy.cluster import _hierarchy
+
+        single, cut = _hierarchy.mst_single_linkage, _hierarchy.cluster_dist
+    except (ImportError, AttributeError):       # pragma: no cover - another scipy
+        single = cut = None
+    y = pdist(points)
+    if single is None or n < 3 or not np.isfinite(y).all():
+        from scipy.cluster.hierarchy import fcluster, linkage
+
+        return fcluster(linkage(points, method="single"), radius, criterion="distance")
+    labels = np.zeros(n, dtype="i")
+    cut(np.ascontiguousarray(single(y, n), dtype=np.float64), labels, float(radius), int(n))
+    return labels
 
 
 @dataclass(frozen=True, eq=False)
