@@ -968,14 +968,36 @@ def _speed_clusters(v: np.ndarray) -> np.ndarray:
     :data:`_CLUSTER_WIDTH` wide).
     """
     order = np.argsort(v, kind="stable")
-    vs = v[order]
-    lab = np.zeros(v.size, dtype=int)
-    c, start = 0, vs[0] if vs.size else 0.0
-    for k in range(1, vs.size):
-        if vs[k] - vs[k - 1] > _CLUSTER_GAP * vs[k] or vs[k] - start > _CLUSTER_WIDTH * vs[k]:
-            c, start = c + 1, vs[k]
-        lab[order[k]] = c
+    vs = v[order].tolist()          # Python floats: the same doubles, a faster loop
+    labs = [0] * len(vs)
+    c, start = 0, vs[0] if vs else 0.0
+    for k in range(1, len(vs)):
+        x = vs[k]
+        if x - vs[k - 1] > _CLUSTER_GAP * x or x - start > _CLUSTER_WIDTH * x:
+            c, start = c + 1, x
+        labs[k] = c
+    lab = np.empty(v.size, dtype=int)
+    lab[order] = labs
     return lab
+
+
+def _cluster_stats(lab: np.ndarray, k: int, means: Sequence[np.ndarray],
+                   median: np.ndarray) -> tuple[list[np.ndarray], np.ndarray]:
+    """Per cluster the mean of each of ``means`` and the median of ``median``.
+
+    The same values as ``np.mean(x[lab == j])`` and ``np.median(median[lab == j])``:
+    each cluster's elements are summed in input order, the medians are the middle
+    order statistics (the mean of the two middle ones for an even count).
+    """
+    grp = np.argsort(lab, kind="stable")          # by cluster, each in input order
+    cuts = np.flatnonzero(np.diff(lab[grp])) + 1
+    out = [np.array([np.mean(part) for part in np.split(x[grp], cuts)]) for x in means]
+    srt = median[np.lexsort((median, lab))]       # by cluster, each sorted
+    cnt = np.bincount(lab, minlength=k)
+    first = np.concatenate(([0], np.cumsum(cnt)[:-1]))
+    hi = srt[first + cnt // 2]
+    lo = srt[first + (cnt - 1) // 2]
+    return out, np.where(cnt % 2 == 1, hi, (lo + hi) / 2.0)
 
 
 def _change_error(v: np.ndarray, sig: np.ndarray | None, resid: np.ndarray | None = None,
@@ -999,11 +1021,12 @@ def _change_error(v: np.ndarray, sig: np.ndarray | None, resid: np.ndarray | Non
     k = int(lab.max()) + 1
     if k < 2:
         return math.inf
-    vc = np.array([np.mean(v[lab == j]) for j in range(k)])
-    sc = np.array([np.median(sig[lab == j]) for j in range(k)])
+    with_resid = resid is not None and k > n_params
+    means, sc = _cluster_stats(lab, k, (v, resid) if with_resid else (v,), sig)
+    vc = means[0]
     w = 1.0 / sc ** 2
-    if resid is not None and k > n_params:
-        ec = np.array([np.mean(resid[lab == j]) for j in range(k)])
+    if with_resid:
+        ec = means[1]
         q = float(np.sum(w * ec ** 2))
         tau2 = max(0.0, (q - (k - n_params)) / float(np.sum(w) - np.sum(w ** 2) / np.sum(w)))
         w = 1.0 / (sc ** 2 + tau2)
