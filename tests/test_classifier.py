@@ -120,6 +120,20 @@ def test_bursts_and_modulation():
     assert sub["waveform_period"] == 2.0 and sub["strobe_dispersion"] > 0.1
 
 
+def test_strobe_state_error_reads_the_velocity_the_displacement_strobe_misses():
+    """The labels call a motion periodic when x AND x' repeat at the cycle starts; a
+    modulation that vanishes at phase 0 leaves x(c_k) periodic and moves x'(c_k)."""
+    pure = _all(_ctx(*_locked()))
+    assert pure["strobe_state_error"] < 1e-4 and pure["strobe_period_error"] < 1e-9
+    mod = _all(_ctx(*_locked(), x=lambda s: 0.005 * np.sin(2 * np.pi * 8 * s)
+                    * (1 + 0.03 * np.sin(2 * np.pi * 1.37 * s))))
+    assert mod["strobe_period_error"] < 1e-9                  # x(c_k) = 0 in every cycle
+    # x'(c_k) = 0.005 w (1 + 0.03 sin(...)); the modulation advances 0.17 of its period
+    # per cycle: p = 1 changes x' by up to 2 x 0.03 sin(0.17 pi) = 0.031 of its size,
+    # the least of p = 1..4
+    assert 0.025 < mod["strobe_state_error"] < 0.032
+
+
 # --------------------------------------------------------------------------- estimator
 @parametrize_with_checks([RegimeClassifier(max_iter=10)])
 def test_sklearn_estimator_checks(estimator, check):
@@ -286,6 +300,13 @@ def test_rule_baseline_applies_the_design_rules():
     assert list(RuleBaseline().predict(pd.DataFrame(rows))) == [
         "2ipc_asym", "2ipc_sym", "no_impact", "smr", "chaotic", "chaotic", "multi_ipc",
         "1ipc"]
+    # periodic means x AND x' repeat (the labels' test): the state's error decides where
+    # it is known, x alone where it is NaN or missing (older analyses)
+    state = [{**base, "strobe_state_error": 0.03}, {**base, "strobe_state_error": 0.005,
+                                                     "strobe_period_error": 0.2},
+             {**base, "strobe_state_error": float("nan")}]
+    assert list(RuleBaseline().predict(pd.DataFrame(state))) == [
+        "chaotic", "2ipc_asym", "2ipc_asym"]
 
 
 # --------------------------------------------------------------------------- shipped model

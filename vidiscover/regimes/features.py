@@ -17,14 +17,15 @@ float, NaN when undefined for the record.
   ``returnmap_cluster_density`` (clusters per point);
 * LO response: ``waveform_period_error`` (the displacement over a cycle repeats
   after p <= 4 cycles), ``waveform_period`` (that p, 0 if none), ``strobe_dispersion``
-  (spread of the stroboscopic section), ``envelope_cv``;
+  (spread of the stroboscopic section), ``envelope_cv``, ``strobe_state_error``
+  (the labels' periodicity test on the stroboscopic LO state, x and x');
 * strengths: ``dv_side_ratio`` (|log| of the mean pulse ratio right/left).
 
 Examples
 --------
 >>> from vidiscover.regimes.features import ALL_FEATURES, REGIME_FEATURES
 >>> len(REGIME_FEATURES), set(REGIME_FEATURES) < set(ALL_FEATURES)
-(16, True)
+(17, True)
 """
 
 from __future__ import annotations
@@ -240,6 +241,70 @@ def _strobe_disp(ctx: FeatureContext) -> float:
     return float(w[:, 0].std() / amp)
 
 
+def _lo_velocity(ctx: FeatureContext) -> tuple[np.ndarray, np.ndarray]:
+    """(ts, v): the LO velocity, the derivative of a cubic Savitzky-Golay fit to x.
+
+    Over windows of a sixteenth of the forcing period (at least 7 samples), on the
+    record's sample grid (non-finite samples interpolated first), half a window
+    short of either end of the record, where the fit would reach past it (once per
+    context).
+    """
+    return ctx.memo("lo_velocity", _lo_velocity_of)
+
+
+def _lo_velocity_of(ctx: FeatureContext) -> tuple[np.ndarray, np.ndarray]:
+    from scipy.signal import savgol_filter
+
+    ts, xf = ctx.finite_motion()
+    if xf.size < 16:
+        return np.zeros(0), np.zeros(0)
+    ts_all = np.asarray(ctx.ts, float)
+    x = xf if ts is ts_all or xf.size == ts_all.size else np.interp(ts_all, ts, xf)
+    dt = float(np.median(np.diff(ts_all)))
+    win = max(7, int(round(ctx.period / (16 * dt))) | 1)
+    if win >= x.size or not dt > 0:
+        return np.zeros(0), np.zeros(0)
+    h = win // 2                              # the fit reaches past the record there
+    if x.size <= 2 * h + 1:
+        return np.zeros(0), np.zeros(0)
+    v = savgol_filter(x, win, 3, deriv=1, delta=dt)[h:x.size - h]
+    v.flags.writeable = False
+    return ts_all[h:x.size - h], v
+
+
+def _strobe_state(ctx: FeatureContext) -> float:
+    """Periodicity error of the stroboscopic LO state (x, x'), as the labels test it.
+
+    Min over p <= 4 of the larger of the largest changes over p cycles of x and of
+    x' at the cycle starts (last half of the record), each relative to its largest
+    magnitude over the record (max |x|, max |x'|; x' from :func:`_lo_velocity`).
+    ``strobe_period_error`` reads x alone: a weakly irregular motion whose x repeats
+    to within 1 % while x' does not is periodic to it and chaotic to the labels.
+    """
+    c = ctx.cycles()
+    ts, xf = ctx.finite_motion()
+    tv, v = _lo_velocity(ctx)
+    amp = ctx.amplitude()
+    if c.size < 6 or xf.size == 0 or v.size == 0 or not amp > 0:
+        return _NAN
+    vmax = float(np.abs(v).max())
+    if not vmax > 0:
+        return _NAN
+    c = c[(c >= tv[0]) & (c <= tv[-1])]       # cycle starts where x' is known
+    if c.size < 6:
+        return _NAN
+    xs = np.interp(c, ts, xf)[c.size // 2:]
+    vs = np.interp(c, tv, v)[c.size // 2:]
+    best = _NAN
+    for p in range(1, 5):
+        if xs.size <= p:
+            break
+        e = max(float(np.abs(xs[p:] - xs[:-p]).max()) / amp,
+                float(np.abs(vs[p:] - vs[:-p]).max()) / vmax)
+        best = e if not (best <= e) else best
+    return best
+
+
 def _env_cv(ctx: FeatureContext) -> float:
     """Coefficient of variation of the per-cycle LO half peak-to-peak."""
     w = cycle_waveforms(ctx)
@@ -267,6 +332,7 @@ REGIME_FEATURES = FeatureSet({
     "waveform_period": _wave_period,
     "strobe_dispersion": _strobe_disp,
     "envelope_cv": _env_cv,
+    "strobe_state_error": _strobe_state,
 })
 
 #: The analysis's own features and the regime features: the set the classifier, sweeps
