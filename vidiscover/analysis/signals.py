@@ -286,15 +286,21 @@ def clipped_mask(a: np.ndarray, a_range: float | None = None) -> np.ndarray:
     """
     finite = np.isfinite(a)
     mask = np.zeros(a.shape, dtype=bool)
-    if not finite.any():
+    every = bool(finite.all())          # the usual case: no masked copies
+    if not every and not finite.any():
         return mask
-    af = np.where(finite, a, 0.0)
+    af = a if every else np.where(finite, a, 0.0)
     if a_range is not None:
         mask |= finite & (np.abs(af) >= a_range)
-    hi, lo = af[finite].max(), af[finite].min()
+    vals = af if every else af[finite]
+    hi, lo = vals.max(), vals.min()
     for rail in (hi, lo):
-        at = finite & (af == rail)
-        if at.sum() >= 2 and rail != 0.0:
+        if rail == 0.0:
+            continue
+        at = af == rail
+        if not every:
+            at &= finite
+        if np.count_nonzero(at) >= 2:
             mask |= at
     return mask
 
