@@ -120,6 +120,34 @@ def test_same_seed_same_report(small_report):
     assert json.dumps(again.to_dict()) == json.dumps(small_report.to_dict())
 
 
+def test_a_worker_process_gives_the_same_report(small_report):
+    # the candidates shared between this process and a worker started at once (its
+    # BLAS may round the last bits differently: values to 1e-9, decisions exactly)
+    rec, _ = recording(0.009, ("excitation_distortion=0.06,0.5",))
+    d2 = diagnose(rec, n_jobs=2, candidates=["excitation_distortion", "inclination"]
+                  ).to_dict()
+    d1 = small_report.to_dict()
+    assert (d2["verdict"], d2["selected"], d2["n_sims"]) == (
+        d1["verdict"], d1["selected"], d1["n_sims"])
+    assert [e["name"] for e in d2["effects"]] == [e["name"] for e in d1["effects"]]
+    for e2, e1 in zip(d2["effects"], d1["effects"]):
+        assert e2["gap_after"] == pytest.approx(e1["gap_after"], rel=1e-9)
+        assert e2["params"] == pytest.approx(e1["params"], rel=1e-9, abs=1e-12)
+
+
+def test_runner_shares_a_batch_in_input_order_and_raises_its_errors():
+    from vidiscover.gap.diagnose import _Runner
+
+    run = _Runner(2, None)
+    items = [float(i) for i in range(12)]
+    assert run(math.sqrt, items, cost=lambda x: x) == [math.sqrt(x) for x in items]
+    with pytest.raises(ValueError):
+        run(math.sqrt, [4.0, -1.0, 9.0, 16.0])
+    assert _Runner(1, None)(math.sqrt, [4.0]) == [2.0]
+    with pytest.raises(InputError, match="n_jobs"):
+        _Runner(0, None)
+
+
 def test_figures_are_written(small_report, tmp_path):
     from vidiscover.gap.figures import write_figures
 

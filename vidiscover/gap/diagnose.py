@@ -10,8 +10,12 @@ significant gap, tries a second effect on top of it (forward selection).
 
 from __future__ import annotations
 
+import collections
+import concurrent.futures
 import dataclasses
 import math
+import os
+import threading
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -28,10 +32,11 @@ from .fit import (
     CandidateFit,
     Model,
     _Objective,
+    best_draw,
     fit_candidate,
     profile_ci,
-    simulate_signature,
-    validation_signature,
+    signature_item,
+    validation_items,
 )
 
 __all__ = ["GapReport", "diagnose", "build_model", "nominal_model", "SIGNIFICANT_GAP",
@@ -310,7 +315,8 @@ def build_model(rec, an=None, *, settle: float = 20.0) -> Model:
                  real=real, settle=settle, instrument=_instrument(an))
 
 
-def nominal_model(rec, an=None, *, seed: int = 0) -> tuple[Model, CandidateFit, int]:
+def nominal_model(rec, an=None, *, seed: int = 0, run=None
+                  ) -> tuple[Model, CandidateFit, int]:
     """Nominal model with its attractor, noise scales and validated gap.
 
     The initial ball speeds of :data:`~vidiscover.gap.fit.BALL_SPEEDS` are tried and
@@ -318,7 +324,9 @@ def nominal_model(rec, an=None, *, seed: int = 0) -> tuple[Model, CandidateFit, 
     mirror-image attractors; which one the rig sits on is history, not physics).
     Replicates with slightly perturbed initial conditions and other sensor noise
     give the noise scale of every statistic (in chaotic regimes this is the
-    trajectory-to-trajectory spread).
+    trajectory-to-trajectory spread). ``run(worker, items)`` simulates the independent
+    draws (default: one after the other, here; :func:`diagnose` shares them between
+    its processes).
 
     Returns
     -------
@@ -327,9 +335,10 @@ def nominal_model(rec, an=None, *, seed: int = 0) -> tuple[Model, CandidateFit, 
         The nominal model scored on the validation draw (``gap_before``).
     n_sims : int
     """
+    run = run if run is not None else (lambda worker, items: [worker(i) for i in items])
     model = build_model(rec, an)
     fx0 = Effects()
-    scan = [simulate_signature(model, fx0, ball_speed=v, noise_seed=seed) for v in BALL_SPEEDS]
+    scan = run(signature_item, [(model, fx0, None, v, seed) for v in BALL_SPEEDS])
     gaps = [compare(model.real, s, {}, allow_mirror=True).total for s in scan]
     order = np.argsort(gaps, kind="stable")
     best = int(order[0])
@@ -340,13 +349,17 @@ def nominal_model(rec, an=None, *, seed: int = 0) -> tuple[Model, CandidateFit, 
     obj = _Objective(model, lambda _: fx0, model.real.r_pooled, tol=0.0)
     obj(0.0)
     model = dataclasses.replace(model, params=model.params.replace(r=obj.r_at(0.0)))
-    reps = [scan[best]] + [
-        simulate_signature(model, fx0, ball_speed=model.ball_speed * (1 + 0.01 * j),
-                           noise_seed=seed + j) for j in range(1, N_REPLICATES)]
+    # the replicates and the validation draws in one batch (the draws are scored
+    # once the replicates have given the noise scales)
+    val_items = validation_items(model, fx0)
+    sims = run(signature_item, [
+        (model, fx0, None, model.ball_speed * (1 + 0.01 * j), seed + j)
+        for j in range(1, N_REPLICATES)] + val_items)
+    reps = [scan[best]] + sims[:N_REPLICATES - 1]
     reps = [r if compare(model.real, r, {}).total <= compare(model.real, mirror(r), {}).total
             else mirror(r) for r in reps]                  # all on the recording's side
     model = model.with_rep_var(noise_scales(reps))
-    val = validation_signature(model, fx0)
+    val = best_draw(model, fx0, sims[N_REPLICATES - 1:])
     nominal = CandidateFit(name="nominal", params={}, n_params=0, r=model.params.r,
                            effects=fx0, gap=compare(model.real, val, model.rep_var),
                            signature=val, n_sims=len(scan) + N_REPLICATES + 1 + obj.n_sims)
@@ -475,7 +488,7 @@ def _pair_items(nominal, fits, max_params=None) -> list[tuple]:
     return items
 
 
-def _best_pair(model, nominal, fits, n_jobs, scheduler, max_params=None):
+def _best_pair(model, nominal, fits, run, max_params=None):
     """The best jointly fitted pair (see :func:`_pair_items` for which are tried).
 
     Every pair's second effect is fitted on top of the first's fit; the
@@ -489,7 +502,8 @@ def _best_pair(model, nominal, fits, n_jobs, scheduler, max_params=None):
     items = _pair_items(nominal, fits, max_params)
     if not items:
         return None, 0
-    steps = _map([(model, a, b) for a, b in items], n_jobs, scheduler, worker=_pair_step)
+    steps = run(_pair_step, [(model, a, b) for a, b in items],
+                cost=lambda it: FIT_COST.get(it[2], 1))
     done = [(a, s) for (a, _), s in zip(items, steps) if s is not None]
     if not done:
         return None, 0
@@ -499,8 +513,8 @@ def _best_pair(model, nominal, fits, n_jobs, scheduler, max_params=None):
     again = [k for k, (a, s) in enumerate(done[:PAIR_POOL])
              if not (a.name in _WALLS and s.name in PROFILES_WALLS)]
     refits = [None] * len(done)
-    for k, r in zip(again, _map([(model, *done[k]) for k in again], n_jobs, scheduler,
-                                worker=_pair_refit)):
+    for k, r in zip(again, run(_pair_refit, [(model, *done[k]) for k in again],
+                               cost=lambda it: FIT_COST.get(it[1].name, 1))):
         refits[k] = r
     pairs = [_constant_laws(_as_pair(a, s, r)) for (a, s), r in zip(done, refits)]
     n = sum(p.n_sims for p in pairs)
@@ -614,13 +628,120 @@ def _fit_item(item):
     return fit_candidate(model, name, base, base_r)
 
 
-def _map(items, n_jobs, scheduler, worker=None):
-    worker = _fit_item if worker is None else worker
-    if n_jobs == 1 and scheduler is None:
-        return [worker(i) for i in items]
-    from ..scale import parallel_map
+#: Simulations a candidate's fit costs, relative (counted on a 5.12 s paper-rig
+#: recording at 9 mm without effect: the 1-D searches of the gap cost 23-28, the rest
+#: 3-6): the costly fits start first, so that the processes finish together.
+FIT_COST = {"clearance_error": 28, "inclination": 24, "coulomb_friction": 23,
+            "asymmetric_restitution": 6, "velocity_dependent_restitution": 6,
+            "excitation_distortion": 4, "sensor_resonance": 3, "contact_duration": 3}
 
-    return parallel_map(worker, items, n_jobs=n_jobs, scheduler=scheduler, progress=False)
+#: Native thread pools of a worker process held to one thread (each process is one
+#: unit of parallelism).
+_ONE_THREAD = {k: "1" for k in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS",
+                                "MKL_NUM_THREADS", "NUMBA_NUM_THREADS")}
+
+
+def _warm_up() -> None:
+    """Load what a fit needs into a worker process while the parent analyses.
+
+    The imports, the simulator's compiled kernel and the analysis' first call: about
+    1.5 s of CPU per process that would otherwise delay the first fit.
+    """
+    from ..analysis import ANALYSIS_FEATURES, PulseModel, analyze
+    from ..params import preset
+    from ..sensors import SensorConfig
+    from ..simulation import simulate
+    from ..workflows import record_simulation
+
+    res = simulate(preset("paper"), settle=0.0, duration=0.5)
+    rec = record_simulation(res, SensorConfig(), seed=0, label=False).recording
+    try:
+        measure(rec, analyze(rec, n_boot=0, pulse=PulseModel(),
+                             features=ANALYSIS_FEATURES.select(["envelope_modulation"])))
+    except Exception:  # noqa: BLE001 - a warm-up only: the real work reports its errors
+        pass
+
+
+class _Runner:
+    """Runs a diagnosis' independent tasks: in this process and ``n - 1`` workers.
+
+    With ``n_jobs`` processes (None: all cores) and no Dask scheduler, ``n_jobs - 1``
+    worker processes are started at once and warm up (:func:`_warm_up`) while this
+    process analyses the recording and simulates the nominal model; every batch of
+    tasks is then shared between this process and the warm workers, the costliest
+    first, each process taking the next task when it is free. (A pool of ``n_jobs``
+    workers started at the candidate fits left a core idle while the parent worked
+    alone, and then paid every worker's start-up before the first fit.) The results
+    do not depend on who ran a task. With a scheduler, batches go to Dask
+    (:func:`~vidiscover.scale.parallel_map`).
+    """
+
+    def __init__(self, n_jobs: int | None, scheduler) -> None:
+        if n_jobs is not None and (isinstance(n_jobs, bool) or not isinstance(n_jobs, int)
+                                   or n_jobs < 1):
+            raise InputError(f"n_jobs must be a positive integer or None (all cores), "
+                             f"was {n_jobs!r}")
+        self.scheduler = scheduler
+        self.executor = None
+        self.warm: list = []
+        n = (n_jobs or os.cpu_count() or 1) if scheduler is None else 1
+        if n > 1:
+            from joblib.externals.loky import get_reusable_executor
+
+            self.executor = get_reusable_executor(max_workers=n - 1, timeout=300,
+                                                  env=_ONE_THREAD)
+            self.warm = [self.executor.submit(_warm_up) for _ in range(n - 1)]
+
+    def __call__(self, worker, items, cost=None) -> list:
+        """``[worker(i) for i in items]``; ``cost(item)``: relative cost (costliest first)."""
+        items = list(items)
+        if self.scheduler is not None:
+            from ..scale import parallel_map
+
+            return parallel_map(worker, items, scheduler=self.scheduler, progress=False)
+        if self.executor is None or len(items) <= 1:
+            return [worker(i) for i in items]
+        order = list(range(len(items)))
+        if cost is not None:
+            order.sort(key=lambda i: -cost(items[i]))
+        queue = collections.deque(order)
+        lock = threading.Lock()
+        out: list = [None] * len(items)
+        errors: list = []
+
+        def take():
+            with lock:
+                return queue.popleft() if queue else None
+
+        def remote(warm) -> None:
+            # a worker still starting takes nothing (this process may finish first)
+            while not warm.done():
+                if not queue:
+                    return
+                concurrent.futures.wait([warm], timeout=0.02)
+            if warm.exception() is not None:
+                return
+            try:
+                while (i := take()) is not None:
+                    out[i] = self.executor.submit(worker, items[i]).result()
+            except BaseException as exc:  # noqa: BLE001 - re-raised in the caller
+                errors.append(exc)
+
+        threads = [threading.Thread(target=remote, args=(w,), daemon=True)
+                   for w in self.warm]
+        for t in threads:
+            t.start()
+        try:
+            while (i := take()) is not None:
+                out[i] = worker(items[i])
+        finally:
+            with lock:
+                queue.clear()
+            for t in threads:
+                t.join()
+        if errors:
+            raise errors[0]
+        return out
 
 
 def diagnose(rec, *, seed: int = 0, n_jobs: int | None = None, scheduler=None,
@@ -667,9 +788,11 @@ def _diagnose(rec, seed, n_jobs, scheduler, candidates, an) -> GapReport:
                          f"known: {', '.join(CANDIDATES)}")
     if not isinstance(seed, int) or seed < 0:
         raise InputError(f"seed must be a non-negative integer, was {seed!r}")
-    model, nominal, n_sims = nominal_model(rec, an, seed=seed)
+    run = _Runner(n_jobs, scheduler)        # workers warm up during the analysis
+    model, nominal, n_sims = nominal_model(rec, an, seed=seed, run=run)
     fx0 = Effects()
-    fits = [f for f in _map([(model, n, fx0, None) for n in names], n_jobs, scheduler)
+    fits = [f for f in run(_fit_item, [(model, n, fx0, None) for n in names],
+                           cost=lambda it: FIT_COST.get(it[1], 1))
             if f is not None]
     n_sims += sum(f.n_sims for f in fits)
     fits = _parsimonious(sorted(fits, key=lambda c: c.score))
@@ -682,7 +805,7 @@ def _diagnose(rec, seed, n_jobs, scheduler, candidates, an) -> GapReport:
         if left or best.n_params >= 3:
             # a significant gap left: pairs of any size; otherwise a rich single
             # effect (a law per wall) is checked against pairs no richer than itself
-            pair, n = _best_pair(model, nominal, fits, n_jobs, scheduler,
+            pair, n = _best_pair(model, nominal, fits, run,
                                  max_params=None if left else best.n_params)
             n_sims += n
             removed = best.score - pair.score if pair is not None else -math.inf

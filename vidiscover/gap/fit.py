@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -32,7 +33,8 @@ from .components import STATS, GapComponents, Signature, compare, measure, mirro
 
 __all__ = ["Model", "CandidateFit", "sensor_config", "record_model", "CANDIDATES", "PENALTY",
            "fit_candidate", "simulate_signature", "validation_signature", "BALL_SPEEDS",
-           "symmetric", "gap_of", "profile_ci"]
+           "symmetric", "gap_of", "profile_ci", "signature_item",
+           "validation_items", "best_draw"]
 
 #: Score penalty per fitted parameter (AIC-like: a gap of ~1 per statistic is noise).
 PENALTY = 2.0
@@ -178,7 +180,41 @@ def simulate_signature(model: Model, effects: Effects, r: float | None = None, *
     Signature
     """
     r = model.params.r if r is None else r
-    return _record(model, _simulate(model, effects, r, ball_speed), noise_seed)
+    key = _memo_key(model, effects, r, ball_speed, noise_seed)
+    if key in _MEMO:
+        _MEMO.move_to_end(key)
+        return _MEMO[key]
+    sig = _record(model, _simulate(model, effects, r, ball_speed), noise_seed)
+    _MEMO[key] = sig
+    if len(_MEMO) > _MEMO_SIZE:
+        _MEMO.popitem(last=False)
+    return sig
+
+
+#: Signatures of this process's recent simulations (a simulation is deterministic: the
+#: same model, effects, r, initial ball speed and noise seed give the same signature).
+#: A diagnosis asks for some twice: the nominal model's r fit starts at the attractor
+#: scan's best draw, and a friction trial whose re-fitted r is clipped at 1 repeats
+#: the trial before it.
+_MEMO: OrderedDict = OrderedDict()
+_MEMO_SIZE = 64
+
+
+def _memo_key(model: Model, effects: Effects, r: float, ball_speed, noise_seed: int):
+    """What a simulated signature depends on (not the recording's statistics)."""
+    return (repr(model.params.replace(r=float(min(1.0, max(0.0, r))))), model.phase,
+            model.duration, model.sample_rate, tuple(model.noise), model.settle,
+            model.ball_speed if ball_speed is None else float(ball_speed),
+            tuple(sorted(model.instrument.items())), repr(effects), int(noise_seed))
+
+
+def signature_item(item: tuple) -> Signature:
+    """Top-level worker: :func:`simulate_signature` of an item.
+
+    The item is ``(model, effects, r, ball_speed, noise_seed)``.
+    """
+    model, effects, r, ball_speed, noise_seed = item
+    return simulate_signature(model, effects, r, ball_speed=ball_speed, noise_seed=noise_seed)
 
 
 @dataclass(frozen=True, eq=False)
@@ -596,8 +632,8 @@ def _validation_speeds(model: Model, effects: Effects) -> list[float]:
     return speeds if symmetric(effects) else speeds + [-v for v in speeds]
 
 
-def validation_signature(model: Model, effects: Effects, r: float | None = None
-                         ) -> Signature:
+def validation_signature(model: Model, effects: Effects, r: float | None = None, *,
+                         run=None) -> Signature:
     """The validation draw of a model.
 
     The best of the draws with other initial conditions and sensor noise than the
@@ -609,12 +645,29 @@ def validation_signature(model: Model, effects: Effects, r: float | None = None
     sits on is history: a draw on the other member of the pair is not evidence
     against the effect (in the battery such draws made a fitted tilt or harmonic
     score worse than the nominal model).
+
+    ``run(worker, items)``: how the independent draws are simulated (default: one
+    after the other, here).
     """
-    draws = [simulate_signature(model, effects, r, ball_speed=v * VALIDATION[0],
-                                noise_seed=VALIDATION[1])
-             for v in _validation_speeds(model, effects)]
+    items = validation_items(model, effects, r)
+    draws = run(signature_item, items) if run is not None else [
+        signature_item(i) for i in items]
+    return best_draw(model, effects, draws)
+
+
+def validation_items(model: Model, effects: Effects, r: float | None = None) -> list:
+    """The validation draws of :func:`validation_signature` (:func:`signature_item`s)."""
+    return [(model, effects, r, v * VALIDATION[0], VALIDATION[1])
+            for v in _validation_speeds(model, effects)]
+
+
+def best_draw(model: Model, effects: Effects, draws: list) -> Signature:
+    """The validation draw closest to the recording (:func:`validation_signature`).
+
+    A symmetric model's draws are also taken as their mirror images.
+    """
     if symmetric(effects):
-        draws += [mirror(d) for d in draws]
+        draws = list(draws) + [mirror(d) for d in draws]
     gaps = [compare(model.real, d, model.rep_var).total for d in draws]
     return draws[int(np.argmin(gaps))]
 
