@@ -438,6 +438,7 @@ class _Tents:
             for k in i[ok]:
                 rows.append((r, k - 1, k))
         self.rows = np.array(rows, dtype=np.int64).reshape(-1, 3)
+        self._assembled: dict = {}
 
     @property
     def n(self) -> int:
@@ -480,7 +481,21 @@ class _Tents:
         return len(keys)
 
     def assemble(self, mu: float, theta_deg: float):
-        """Reconstruct with (mu, theta) and return (Theta, Y, scales, n_sign_changes)."""
+        """Reconstruct with (mu, theta) and return (Theta, Y, scales, n_sign_changes).
+
+        Kept per law (the fixed points and the selection come back to the same laws:
+        a fixed point's last law is rebuilt to score it, the selection starts from the
+        best one); the arrays are read-only.
+        """
+        key = (mu, theta_deg, math.copysign(1.0, mu), math.copysign(1.0, theta_deg))
+        out = self._assembled.get(key)
+        if out is None:
+            out = self._assembled[key] = self._assemble(mu, theta_deg)
+            for a in out[:3]:
+                a.setflags(write=False)
+        return out
+
+    def _assemble(self, mu: float, theta_deg: float):
         J = len(self.library)
         Theta = np.zeros((self.n, J))
         Y = np.zeros(self.n)
