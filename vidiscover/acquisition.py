@@ -235,7 +235,7 @@ def _exp_rows(t: np.ndarray, P: np.ndarray) -> np.ndarray:
             z[:] = np.exp(P[:, None, :] * step[:, :, None])
             z[np.arange(M), j0] = np.exp(P * t[np.arange(M), j0][:, None])
             first = np.arange(N)[None, :] < j0[:, None]
-            z[first] = 1.0
+            np.copyto(z, 1.0, where=first[:, :, None])
             return np.cumprod(z, axis=1)
     return np.exp(t[..., None] * P[:, None, :])
 
@@ -337,6 +337,22 @@ def pulse_response(t: np.ndarray, kind: str, order: int, cutoff: float, tau: flo
     return out
 
 
+def _scaled_sinc(c: np.ndarray, u: np.ndarray) -> np.ndarray:
+    """``c * np.sinc(c * u)``, the same operations as numpy's, in one buffer.
+
+    (numpy's ``sinc`` makes three temporaries the size of ``u``; these grids are
+    large.)
+    """
+    x = np.multiply(c, u)
+    np.multiply(math.pi, x, out=x)
+    zero = x == 0
+    if zero.any():
+        x[zero] = np.finfo(x.dtype).eps
+    y = np.sin(x)
+    np.divide(y, x, out=y)
+    return np.multiply(c, y, out=y)
+
+
 def _kaiser(u: np.ndarray, halfwidth: float) -> np.ndarray:
     """The linear-phase kernel's Kaiser window at times ``u`` (samples)."""
     return np.where(np.abs(u) < halfwidth,
@@ -401,7 +417,7 @@ def pulse_responses(t: np.ndarray, kind: str, order: int, cutoffs: np.ndarray,
                 _, first, inv = np.unique(np.column_stack([tau[wide], tw]), axis=0,
                                           return_index=True, return_inverse=True)
             win = _kaiser(u[first], halfwidth)[inv.ravel()]
-            out[wide] = np.einsum("mnk,mk->mn", 2 * fw * np.sinc(2 * fw * u) * win, p)
+            out[wide] = np.einsum("mnk,mk->mn", _scaled_sinc(2 * fw, u) * win, p)
         return out
     pu, ru = _unit_poles(kind, int(order))
     wc = 2 * math.pi * fc                                             # (M, 1)

@@ -465,7 +465,9 @@ class _Objective:
         self.index = (np.arange(-pre, post + 1)[None, :] + pre) * res - steps[:, None] \
             + steps.max()
         self.nu = int(self.index.max()) + 1
-        self._rows: dict = {}          # (kind, order, halfwidth) -> {model: response row}
+        # response rows computed so far (:meth:`_responses`): model -> row of the store
+        self._slot: dict = {}
+        self._store = np.empty((256, self.nu))
 
     @property
     def two_walls(self) -> bool:
@@ -521,18 +523,25 @@ class _Objective:
         reused as they are and the others are computed together, the same values.
         """
         u = self.u0 + np.arange(self.nu) * self.step
-        cache = self._rows.setdefault((kind, int(order), int(halfwidth)), {})
-        keys = [r.tobytes() for r in np.column_stack([cs, ts, ss, pp, mm, zz, ref])]
-        new = [i for i, k in enumerate(keys) if k not in cache]
+        slot = self._slot
+        keys = [(kind, int(order), int(halfwidth), r.tobytes())
+                for r in np.column_stack([cs, ts, ss, pp, mm, zz, ref])]
+        new = [i for i, k in enumerate(keys) if k not in slot]
         if new:
             n = np.asarray(new)
             mn = mm[n]
             Gn = pulse_responses(u[None, :] + ref[n, None], kind, order, cs[n], ts[n],
                                  halfwidth, ss[n], pp[n], mn if (mn > 0).any() else None,
                                  zz[n])
-            for i, row in zip(new, Gn):
-                cache[keys[i]] = row
-        return np.stack([cache[k] for k in keys])
+            used = len(slot)
+            if used + n.size > self._store.shape[0]:          # grow by doubling
+                grown = np.empty((max(2 * self._store.shape[0], used + n.size), self.nu))
+                grown[:used] = self._store[:used]
+                self._store = grown
+            self._store[used:used + n.size] = Gn
+            for j, i in enumerate(new):
+                slot[keys[i]] = used + j
+        return self._store[[slot[k] for k in keys]]
 
     def grid(self, kind: str, order: int, cutoffs: np.ndarray, taus: np.ndarray,
              groups, halfwidth: int, skews: np.ndarray | None = None,
@@ -567,10 +576,14 @@ class _Objective:
         cs, ts, ss, pp, mm, zz, ref = (v[first] for v in (cs, ts, ss, pp, mm, zz, ref))
         G = self._responses(kind, order, halfwidth, cs, ts, ss, pp, mm, zz, ref)
         K = G[:, self.index[::stride]]                               # (M, S, W)
+        # (not in place: the gathered K is not C-ordered, and the product below would
+        # then take another BLAS path and round differently)
         K = K - (K @ self.Q) @ self.Q.T
         kk = np.einsum("msw,msw->ms", K, K)
         C = (K.reshape(-1, K.shape[-1]) @ self.Y.T).reshape(K.shape[0], K.shape[1], -1)
-        E = (C ** 2 / kk[:, :, None]).max(axis=1)[inv.ravel()]      # (M, n)
+        np.square(C, out=C)
+        C /= kk[:, :, None]
+        E = C.max(axis=1)[inv.ravel()]                               # (M, n)
         yy = np.sum(self.Y ** 2, axis=1)
         return np.stack([(float(np.sum(yy[rows])) - E[:, rows].sum(axis=1))
                          .reshape(cutoffs.size, taus.size) for rows in groups])
