@@ -467,6 +467,7 @@ class _Objective:
         self.nu = int(self.index.max()) + 1
         # response rows computed so far (:meth:`_responses`): model -> row of the store
         self._slot: dict = {}
+        self._grids: dict = {}         # :meth:`grid`'s answers by their arguments
         self._store = np.empty((256, self.nu))
 
     @property
@@ -548,6 +549,29 @@ class _Objective:
              phases: np.ndarray | None = None, mount: tuple[float, float] = (0.0, 0.02),
              mounts: np.ndarray | None = None, zetas: np.ndarray | None = None,
              stride: int = 1) -> np.ndarray:
+        """Residual energies of a grid of models (:meth:`_grid`), each grid computed once.
+
+        The search asks for some grids again (a refinement's joint and separate runs
+        from the same start, a family's coarse grid with the half-sine again): those are
+        answered from a memo (a copy of the same array).
+        """
+        def b(v):
+            return None if v is None else np.asarray(v, dtype=float).tobytes()
+
+        key = (kind, int(order), b(cutoffs), b(taus),
+               tuple(np.asarray(g).tobytes() for g in groups), int(halfwidth), b(skews),
+               b(phases), tuple(map(float, mount)), b(mounts), b(zetas), int(stride))
+        out = self._grids.get(key)
+        if out is None:
+            out = self._grids[key] = self._grid(kind, order, cutoffs, taus, groups, halfwidth,
+                                                skews, phases, mount, mounts, zetas, stride)
+        return out.copy()
+
+    def _grid(self, kind: str, order: int, cutoffs: np.ndarray, taus: np.ndarray,
+              groups, halfwidth: int, skews: np.ndarray | None = None,
+              phases: np.ndarray | None = None, mount: tuple[float, float] = (0.0, 0.02),
+              mounts: np.ndarray | None = None, zetas: np.ndarray | None = None,
+              stride: int = 1) -> np.ndarray:
         """Residual energy of each group of pulses for every (cut-off, ``tau``) pair.
 
         All models of the grid are evaluated at once (:func:`pulse_responses`);
