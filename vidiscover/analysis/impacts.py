@@ -859,9 +859,18 @@ def _take_larger(z0: np.ndarray, z1: np.ndarray, keep_ties: bool) -> None:
     ``z0 = where(|z0| >= |z1|, z0, z1)`` if ``keep_ties``, else
     ``z0 = where(|z1| > |z0|, z1, z0)``.
     """
+    m = min(z0.size, _BLOCK)
+    buf0, buf1 = np.empty(m, dtype=z0.dtype), np.empty(m, dtype=z1.dtype)
+    buft = np.empty(m, dtype=bool)
     for lo in range(0, z0.size, _BLOCK):
         a, b = z0[lo:lo + _BLOCK], z1[lo:lo + _BLOCK]
-        take = ~(np.abs(a) >= np.abs(b)) if keep_ties else np.abs(b) > np.abs(a)
+        aa, ab, take = buf0[:a.size], buf1[:a.size], buft[:a.size]   # (no temporaries)
+        np.abs(a, out=aa)
+        np.abs(b, out=ab)
+        if keep_ties:
+            np.logical_not(np.greater_equal(aa, ab, out=take), out=take)
+        else:
+            np.greater(ab, aa, out=take)
         np.copyto(a, b, where=take)
 
 
