@@ -214,9 +214,10 @@ class PulseModel:
         pi = ph.astype(np.int64)
         w = (ph - pi)[:, None]
         m = j[None, :] + (self.span(fs) + 1 + _TABLE_PAD) + fl.astype(np.int64)[:, None]
-        row = pi[:, None]
-        lo = T[row, m]
-        return lo + w * (T[row + 1, m] - lo)
+        k = pi[:, None] * T.shape[1] + m          # T[row, m] and T[row + 1, m], flat
+        flat = T.ravel()
+        lo = flat[k]
+        return lo + w * (flat[k + T.shape[1]] - lo)
 
     def peak(self, fs: float) -> float:
         """Kernel value at the reference (1/s): a pulse of area dv peaks at dv * peak."""
