@@ -490,10 +490,20 @@ def estimate_offsets(t: np.ndarray, x: np.ndarray, a: np.ndarray, xe: np.ndarray
             if not all(math.isfinite(u) for u in v):
                 continue
             seg = slice(k0, k1)
-            a_bias = float(np.nanmean(a[seg])) - (v[1] - v[0]) / (L * dt)
-            return Offsets(a_bias=a_bias, x_offset=float(np.nanmean(x[seg])),
-                           xe_offset=float(np.nanmean(xe[seg])), n_cycles=n_try)
+            a_bias = _nanmean(a[seg]) - (v[1] - v[0]) / (L * dt)
+            return Offsets(a_bias=a_bias, x_offset=_nanmean(x[seg]),
+                           xe_offset=_nanmean(xe[seg]), n_cycles=n_try)
     return Offsets()
+
+
+def _nanmean(y: np.ndarray) -> float:
+    """``np.nanmean(y)``, without its masked copy when ``y`` has no NaN.
+
+    (The same pairwise sum of the same values, divided by the same count.)
+    """
+    if np.isnan(y).any():
+        return float(np.nanmean(y))
+    return float(np.mean(y))
 
 
 def _slope(y: np.ndarray, dt: float) -> float:
