@@ -17,6 +17,7 @@ from gap_cases import quick_battery, recording
 from vidiscover.errors import InputError
 from vidiscover.gap import STATS, GapReport, diagnose, measure
 from vidiscover.gap.components import GROUPS, compare, energy_distance
+from vidiscover.gap.diagnose import SIGNIFICANT_DROP
 
 
 def test_energy_distance_of_point_masses_and_identical_clouds():
@@ -181,6 +182,22 @@ def test_no_effect_is_no_significant_gap(battery, engine):
     # catalogue effect; its model form stays within the calibrated spread
     c = _case(battery, "none", engine)
     assert c["predicted"] == "none" and not c["significant"]
+    # a nominal gap no effect can make significant: candidates on their grids only
+    assert c["refined"] == (c["gap_before"] >= SIGNIFICANT_DROP)
+
+
+def test_an_unrefined_search_returns_the_best_grid_point_after_the_grid_alone():
+    from vidiscover.gap.fit import _minimise_1d
+
+    calls = []
+
+    def f(x):
+        calls.append(x)
+        return (x - 0.3) ** 2
+
+    assert _minimise_1d(f, 0.0, 1.0, n_grid=5, refine=False) == 0.25
+    assert len(calls) == 5
+    assert _minimise_1d(f, 0.0, 1.0, n_grid=5) == pytest.approx(0.3, abs=0.02)
 
 
 def test_two_effects_at_once_are_both_named_and_explain_the_gap(battery):

@@ -37,7 +37,10 @@ def human_gap(doc: dict) -> str:
     comps = doc["components"]
     lines.append("  components (before -> after): " + ", ".join(
         f"{g} {c['before']:.1f}->{c['after']:.1f}" for g, c in comps.items()))
-    lines.append("  candidates (validated gap, shrink):")
+    lines.append("  candidates (validated gap, shrink)" + (
+        ":" if doc.get("refined", True) else
+        f", fitted on their grids only (no effect can make a gap below "
+        f"{doc['threshold_drop'][0]:g} significant):"))
     for e in doc["effects"]:
         params = param_text(e["params"], e.get("ci"))
         lines.append(f"    {e['name']:<32} {e['gap_after']:>10.1f}  "

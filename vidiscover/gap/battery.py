@@ -404,7 +404,7 @@ def run_case(case: Case) -> dict:
                                (d["gap_before"] - true_fit.gap.total) / d["gap_before"]),
         "runner_up": rep.candidates[1].name if len(rep.candidates) > 1 else None,
         "time_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0,
-        "n_sims": rep.n_sims,
+        "n_sims": rep.n_sims, "refined": d["refined"],
     }
 
 

@@ -179,7 +179,9 @@ class GapReport:
         """JSON-ready dict.
 
         contract keys ``gap_before``, ``effects``, ``attributed``, ``unexplained``,
-        plus components, per-statistic gaps, verdict and the nominal model.
+        plus components, per-statistic gaps, verdict and the nominal model;
+        ``refined`` is false when the candidates were fitted on their grids only (a
+        nominal gap too small for any effect to make significant).
         """
         before = self.nominal.gap
         effects = []
@@ -214,6 +216,7 @@ class GapReport:
                         "noise": list(self.model.noise), "r": self.nominal.r},
             "penalty_per_param": PENALTY,
             "n_sims": self.n_sims,
+            "refined": self.model.refine,
         })
 
 
@@ -790,6 +793,11 @@ def _diagnose(rec, seed, n_jobs, scheduler, candidates, an) -> GapReport:
         raise InputError(f"seed must be a non-negative integer, was {seed!r}")
     run = _Runner(n_jobs, scheduler)        # workers warm up during the analysis
     model, nominal, n_sims = nominal_model(rec, an, seed=seed, run=run)
+    if nominal.gap.total < SIGNIFICANT_DROP:
+        # no effect can make this gap significant (see _significant): the verdict is
+        # "none" whatever the fits give, so the candidates are fitted on their grids
+        # only (no golden sections: about a quarter of a diagnosis' simulations)
+        model = dataclasses.replace(model, refine=False)
     fx0 = Effects()
     fits = [f for f in run(_fit_item, [(model, n, fx0, None) for n in names],
                            cost=lambda it: FIT_COST.get(it[1], 1))

@@ -73,6 +73,11 @@ class Model:
     alt_speed : float
         The runner-up initial ball speed (a second validation draw, in case a
         fitted model lands on another attractor than the nominal one).
+    refine : bool
+        Refine the candidates' searches (golden sections after the grids, a second
+        correction of the walls). Off when no fit could change the verdict
+        (:func:`~vidiscover.gap.diagnose.diagnose`: a nominal gap too small for any
+        effect to make significant): the candidates are then fitted on their grids.
     instrument : dict
         The accelerometer chain learned from the recording
         (:class:`~vidiscover.sensors.SensorConfig` fields: anti-alias kind, order,
@@ -92,6 +97,7 @@ class Model:
     ball_speed: float = 0.6
     alt_speed: float = 0.45
     instrument: dict = field(default_factory=dict)
+    refine: bool = True
 
     def with_rep_var(self, rep_var: dict) -> Model:
         """A copy with replicate variances."""
@@ -406,11 +412,11 @@ class _Objective:
 
 
 def _minimise_1d(f, lo: float, hi: float, n_grid: int = 5, n_golden: int = 4,
-                 extra: float | None = None) -> float:
+                 extra: float | None = None, refine: bool = True) -> float:
     """Grid over [lo, hi] then golden-section refinement around the best point.
 
     ``extra``: a point added to the grid (a direct estimate), evaluated in its place
-    in ascending order.
+    in ascending order. ``refine=False``: the best grid point.
     """
     grid = np.linspace(lo, hi, n_grid)
     if extra is not None and np.isfinite(extra) and lo < extra < hi:
@@ -418,6 +424,8 @@ def _minimise_1d(f, lo: float, hi: float, n_grid: int = 5, n_golden: int = 4,
         n_grid += 1
     vals = [f(x) for x in grid]
     k = int(np.argmin(vals))
+    if not refine:
+        return float(grid[k])
     a, b = grid[max(k - 1, 0)], grid[min(k + 1, n_grid - 1)]
     g = (math.sqrt(5) - 1) / 2
     c, d = b - g * (b - a), a + g * (b - a)
@@ -446,7 +454,7 @@ def _fit_asymmetric(model: Model, base: Effects):
         return None
     p = {"r_right": float(np.clip(rr, 0, 1)), "r_left": float(np.clip(rl, 0, 1))}
     n = 0
-    for _ in range(2):
+    for _ in range(2 if model.refine else 1):
         sig = simulate_signature(model, base.with_effect("asymmetric_restitution", **p))
         n += 1
         for side in ("right", "left"):
@@ -483,7 +491,7 @@ def _fit_velocity(model: Model, base: Effects):
             "left": _wall_law(real.impacts, -1, real.r_pooled)}
     n = 0
     p: dict = {}
-    for _ in range(2):
+    for _ in range(2 if model.refine else 1):
         p = {s: _law_spec(*laws[s]) for s in laws}
         fx = base.with_effect("velocity_dependent_restitution", **p)
         sig = simulate_signature(model, fx)
@@ -500,7 +508,7 @@ def _fit_1d(model: Model, base: Effects, name: str, key: str, lo: float, hi: flo
             transform=float, n_grid: int = 5, extra: float | None = None):
     obj = _Objective(model, lambda th: base.with_effect(name, **{key: transform(th)}),
                      model.real.r_pooled)
-    best = _minimise_1d(obj, lo, hi, n_grid=n_grid, extra=extra)
+    best = _minimise_1d(obj, lo, hi, n_grid=n_grid, extra=extra, refine=model.refine)
     return {key: transform(best)}, 1, obj.r_at(best), obj.n_sims, \
         obj.effects_at(best).without(name)
 
@@ -583,7 +591,7 @@ def _fit_contact(model: Model, base: Effects):
         return {"tau": 2e-5}, 1, model.params.r, 1
     lo, hi = math.log(2e-5), math.log(4e-3)
     best = _minimise_1d(lambda u: so.gap("contact_duration", tau=math.exp(u)), lo, hi,
-                        n_grid=7, n_golden=6)
+                        n_grid=7, n_golden=6, refine=model.refine)
     return {"tau": float(math.exp(best))}, 1, model.params.r, 1
 
 
@@ -599,11 +607,13 @@ def _fit_resonance(model: Model, base: Effects):
         return None
     f_s = float(f[band][np.argmax(ratio[band])])
     zl = _minimise_1d(lambda u: so.gap("sensor_resonance", f_s=f_s, zeta_s=math.exp(u)),
-                      math.log(0.003), math.log(0.5), n_grid=6, n_golden=5)
+                      math.log(0.003), math.log(0.5), n_grid=6, n_golden=5,
+                      refine=model.refine)
     zeta = float(math.exp(zl))
     df = f[1] - f[0]
     fl = _minimise_1d(lambda x: so.gap("sensor_resonance", f_s=x, zeta_s=zeta),
-                      max(20.0, f_s - df), f_s + df, n_grid=3, n_golden=4)
+                      max(20.0, f_s - df), f_s + df, n_grid=3, n_golden=4,
+                      refine=model.refine)
     return {"f_s": float(fl), "zeta_s": zeta}, 2, model.params.r, 1
 
 
