@@ -106,6 +106,7 @@ def test_human_output_prints_the_equations(recordings, tmp_path):
     (["{rec}", "--level", "1.5"], "--level must be in (0, 1)"),
     (["{rec}", "--max-tilt", "0"], "--max-tilt must be in (0, 90)"),
     (["{rec}", "--min-effect", "-0.1"], "--min-effect must be >= 0"),
+    (["{rec}", "--n-jobs", "0"], "--n-jobs must be >= 1"),
     (["{bad}"], "bad.csv"),
 ])
 def test_bad_input_is_one_line_exit_2_and_no_output(recordings, tmp_path, args, words):
@@ -149,3 +150,21 @@ def test_rising_laws_are_asked_for_on_the_command_line(recordings, tmp_path, mon
     assert res.exit_code == 0, res.output
     assert seen["impact_kws"] == want
     assert "--rising" in CliRunner().invoke(main, ["discover", "--help"]).output
+
+
+def test_one_core_gives_the_same_files_as_all_cores(recordings, discovered, tmp_path):
+    """The default analyses the recordings side by side in forked processes and fits the
+    impact laws there while this process fits the flight law; ``--n-jobs 1`` runs all
+    of it here. Every number is the same (the tasks do not depend on where they run)."""
+    doc, out = discovered
+    serial = tmp_path / "serial"
+    result = CliRunner().invoke(main, ["discover", *map(str, recordings), "--out",
+                                       str(serial), "--n-boot", "40", "--json",
+                                       "--n-jobs", "1"])
+    assert result.exit_code == 0, result.output
+    one = json.loads(result.stdout)
+    assert {k: v for k, v in one.items() if k != "out"} == \
+        {k: v for k, v in doc.items() if k != "out"}
+    for name in doc["files"]:
+        if name.endswith(".csv") or name.endswith(".txt"):
+            assert (serial / name).read_bytes() == (out / name).read_bytes(), name

@@ -46,7 +46,7 @@ def run_discover(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
                  criterion: str = "aicc", min_effect: float | None = None,
                  max_tilt: float = 10.0, flight: bool = True, figures: bool = True,
                  progress: bool = False, channels: dict | None = None,
-                 rising: bool = False) -> dict:
+                 rising: bool = False, n_jobs: int | None = 1) -> dict:
     """Discover the laws of pooled recordings and write the results (in-process CLI).
 
     Parameters
@@ -85,6 +85,9 @@ def run_discover(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
         Also report impact laws in which r rises with speed (``--rising``; they must
         then clear 4x the reporting threshold). Off by default: no contact law rises,
         while the systematic errors of slow impacts make r look as if it did.
+    n_jobs : int or None
+        Cores to use (``--n-jobs``; None: all): the recordings are analysed side by
+        side in forked processes (Linux). Same results whatever the number.
 
     Returns
     -------
@@ -120,6 +123,8 @@ def run_discover(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
         raise InputError(f"--max-tilt must be in (0, 90) degrees, was {max_tilt!r}")
     if seed < 0:
         raise InputError(f"--seed must be >= 0, was {seed}")
+    if n_jobs is not None and n_jobs < 1:
+        raise InputError(f"--n-jobs must be >= 1 (cores to use), was {n_jobs!r}")
     paths = recording_paths(paths)
     out = check_out_dir(out)
     # check all inputs first
@@ -127,7 +132,7 @@ def run_discover(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
     result = discover_laws(recordings, mu=mu, seed=seed, n_boot=n_boot, level=level,
                            criterion=criterion, flight=flight, progress=progress,
                            min_effect=float(min_effect), max_tilt_deg=float(max_tilt),
-                           impact_kws={"rising": True} if rising else None)
+                           impact_kws={"rising": True} if rising else None, n_jobs=n_jobs)
     doc = result.summary()
     files = ["discovery.json", "equations.txt", "impacts.csv", "candidates_right.csv",
              "candidates_left.csv", "flight_residuals.csv"]
@@ -206,12 +211,15 @@ def human_lines(doc: dict) -> list[str]:
               help="Also report impact laws in which r rises with speed (at 4x the "
                    "threshold). Off by default: no contact law rises, while systematic "
                    "errors of slow impacts look like it.")
+@click.option("--n-jobs", type=int, default=None,
+              help="Cores to use (default: all): the recordings are analysed side by side "
+                   "in forked processes (Linux). Same results whatever the number.")
 @click.option("--no-flight", is_flag=True, help="Skip the flight-law discovery.")
 @click.option("--no-figures", is_flag=True, help="Skip the figures (faster).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON document.")
 @handle_errors
 def discover(recordings, out, mu, meta, seed, n_boot, level, criterion, min_effect, max_tilt,
-             channels, rising, no_flight, no_figures, as_json):
+             channels, rising, n_jobs, no_flight, no_figures, as_json):
     """Discover the flight law and the impact law per wall from pooled recordings.
 
     RECORDINGS are CSV/Parquet/NPZ files with columns t, x, a, xe and a metadata
@@ -223,5 +231,5 @@ def discover(recordings, out, mu, meta, seed, n_boot, level, criterion, min_effe
                        level=level, criterion=criterion, min_effect=min_effect,
                        max_tilt=max_tilt, flight=not no_flight, figures=not no_figures,
                        progress=not as_json and len(recordings) > 1, channels=channels,
-                       rising=rising)
+                       rising=rising, n_jobs=n_jobs)
     emit(as_json, doc, "\n".join(human_lines(doc)))

@@ -39,7 +39,8 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Mapping, Sequence
+import sys
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -233,6 +234,16 @@ def _analysis_of(item, mu: float, detection, meta) -> AnalysisResult:
     return analyze(item, mu=mu, detection=detection, n_boot=0)
 
 
+def _reanalysis(rec: Recording, detection, law: tuple[float, float], pulse) -> AnalysisResult:
+    """The analysis of ``rec`` again, with the flight law ``(mu, theta_deg)``."""
+    return analyze(rec, detection=detection, n_boot=0, flight_law=law, pulse=pulse)
+
+
+def _impact_law(d: pd.DataFrame, kws: Mapping) -> ImpactLawResult:
+    """:func:`discover_impact_law` of one wall's pooled impacts."""
+    return discover_impact_law(d["v"], d["r"], sigma=d["sigma"], groups=d["group"], **kws)
+
+
 def _instrument_of(analysis: AnalysisResult):
     """The pulse response an analysis used, for a re-analysis of the same recording.
 
@@ -246,6 +257,96 @@ def _instrument_of(analysis: AnalysisResult):
     if any(w.startswith("too few strong isolated pulses") for w in det.warnings):
         return None
     return det.pulse
+
+
+# --------------------------------------------------------------------- processes
+def _can_fork() -> bool:
+    """Whether this process may fork workers: Linux, and not a daemonic worker itself."""
+    import multiprocessing
+
+    return (sys.platform.startswith("linux")
+            and "fork" in multiprocessing.get_all_start_methods()
+            and not multiprocessing.current_process().daemon)
+
+
+class _Runner:
+    """Independent tasks in forked copies of this process, this one taking its share.
+
+    Forked workers start with this process's modules imported and its inputs in
+    memory (a spawned worker would pay ~1 s of imports, as long as an analysis);
+    each task's result is sent back pickled. ``width - 1`` workers (``width``: the
+    most tasks at once, this process running one), at most ``2 n_jobs - 1``, so that
+    e.g. three analyses on two cores run side by side (1.5 analyses long, not two in
+    a row). A task gives the same result in a worker as here; ``n_jobs == 1``, or no
+    fork (not Linux, or inside a daemonic worker), runs everything here.
+    """
+
+    def __init__(self, n_jobs: int | None, width: int) -> None:
+        if n_jobs is not None and (isinstance(n_jobs, bool) or not isinstance(n_jobs, int)
+                                   or n_jobs < 1):
+            raise InputError(f"n_jobs must be a positive integer or None (all cores), "
+                             f"was {n_jobs!r}")
+        cores = (os.cpu_count() or 1) if n_jobs is None else n_jobs
+        workers = min(width - 1, 2 * cores - 1)
+        self.executor = None
+        if cores > 1 and workers >= 1 and _can_fork():
+            import multiprocessing
+            from concurrent.futures import ProcessPoolExecutor
+
+            # what every task needs, imported once before the workers fork
+            import pysindy  # noqa: F401
+            import scipy.optimize  # noqa: F401
+            import scipy.special  # noqa: F401
+
+            self.executor = ProcessPoolExecutor(
+                max_workers=workers, mp_context=multiprocessing.get_context("fork"))
+
+    def submit(self, func: Callable, *args):
+        """Start ``func(*args)`` in a worker; a handle for :meth:`result` (None: not started)."""
+        if self.executor is None:
+            return None
+        from concurrent.futures.process import BrokenProcessPool
+
+        try:
+            return self.executor.submit(func, *args)
+        except (BrokenProcessPool, RuntimeError):
+            return None
+
+    @staticmethod
+    def result(handle, func: Callable, *args):
+        """The result of a :meth:`submit`, computed here if it was not started or was lost."""
+        if handle is None or handle.cancel():
+            return func(*args)
+        from concurrent.futures.process import BrokenProcessPool
+
+        try:
+            return handle.result()
+        except BrokenProcessPool:        # a worker died (e.g. out of memory): redo it here
+            return func(*args)
+
+    def map(self, func: Callable, tasks: Sequence[tuple], bar=None) -> list:
+        """``[func(*t) for t in tasks]``: this process runs the first and any not started."""
+        if not tasks:
+            return []
+        handles = [None] + [self.submit(func, *t) for t in tasks[1:]]
+        out = [None] * len(tasks)
+        done = [False] * len(tasks)
+        for k in [0, *range(len(tasks) - 1, 0, -1)]:
+            if k == 0 or handles[k] is None or handles[k].cancel():
+                out[k], done[k] = func(*tasks[k]), True
+                if bar is not None:
+                    bar.update(1)
+        for k in range(1, len(tasks)):
+            if not done[k]:
+                out[k] = self.result(handles[k], func, *tasks[k])
+                if bar is not None:
+                    bar.update(1)
+        return out
+
+    def close(self) -> None:
+        if self.executor is not None:
+            self.executor.shutdown(wait=True, cancel_futures=True)
+            self.executor = None
 
 
 def _pool(analyses: Sequence[AnalysisResult], side: str) -> pd.DataFrame:
@@ -284,7 +385,7 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
              meta=None,
              flight: bool = True, flight_kws: Mapping | None = None,
              impact_kws: Mapping | None = None, refine_mu: bool = True,
-             progress: bool = False) -> DiscoveryResult:
+             progress: bool = False, n_jobs: int | None = 1) -> DiscoveryResult:
     """Discover the flight law and the impact law per wall from one or more recordings.
 
     Parameters
@@ -330,6 +431,12 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
         analyse the recordings again with it before the impact-law discovery.
     progress : bool, optional
         Show a tqdm progress bar over the recordings.
+    n_jobs : int or None, optional
+        Cores to use (None: all). Above 1 (on Linux), the recordings are analysed in
+        forked worker processes side by side, and the impact laws are fitted in
+        workers while this process discovers the flight law (on the analyses the
+        impact laws then come from; refitted when the flight law has them redone).
+        The results do not depend on it.
 
     Returns
     -------
@@ -353,49 +460,70 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
             raise InputError(f"{name} must be a mapping of keyword arguments, "
                              f"was {type(kws).__name__}")
     items = _as_items(recordings)
+    kws = {"seed": int(seed), "n_boot": int(n_boot), "level": float(level),
+           "criterion": criterion, "terms": terms, "min_effect": min_effect,
+           **dict(impact_kws or {})}
+    # the analyses side by side; then the flight law here while workers fit the impact
+    # laws on the same analyses (used unless the flight law sends them to be redone)
+    run = _Runner(n_jobs, max(len(items), 1 + len(SIDES)))
+    bar = None
     if progress:
         from tqdm import tqdm
 
-        items = tqdm(items, desc="analyse", unit="rec")
-    analyses = tuple(_analysis_of(it, mu, detection, meta) for it in items)
-    warnings = [f"{a.name}: {w}" for a in analyses for w in a.warnings]
-    flight_result = None
-    if flight:
-        flight_result, note = _flight_law(analyses, int(seed), int(n_boot), float(level),
-                                          max_tilt_deg, flight_kws)
-        if note:
-            warnings.append(note)
-    mu_impacts, theta_impacts = float(mu), 0.0
-    if flight_result is None or not flight_result.identified:
+        bar = tqdm(total=len(items), desc="analyse", unit="rec")
+    try:
+        todo = [k for k, it in enumerate(items) if not isinstance(it, AnalysisResult)]
+        done = run.map(_analysis_of, [(items[k], mu, detection, meta) for k in todo], bar)
+        analyses = list(items)
+        for k, a in zip(todo, done, strict=True):
+            analyses[k] = a
+        if bar is not None:
+            bar.update(len(items) - len(todo))
+            bar.close()
+        analyses = tuple(analyses)
+        data = {side: _pool(analyses, side) for side in SIDES}
+        ahead = {side: run.submit(_impact_law, data[side], kws) for side in SIDES} \
+            if flight else {}
+        warnings = [f"{a.name}: {w}" for a in analyses for w in a.warnings]
+        flight_result = None
         if flight:
-            warnings.append(f"impact laws fitted with the flights of the assumed law "
-                            f"(mu = {mu:g}, theta = 0{': straight lines' if mu == 0 else ''})"
-                            ", not with a flight law")
-    elif refine_mu:
-        mu_id = float(flight_result.mu)
-        theta_id = float(flight_result.theta_deg)
-        theta_id = theta_id if abs(theta_id) >= 0.05 else 0.0
-        recs = [a.recording for a in analyses]
-        if (all(r is not None for r in recs)
-                and ((mu_id > 0 and abs(mu_id - mu) > 0.005) or theta_id)):
-            mu_impacts, theta_impacts = min(max(mu_id, 0.0), 2.0), theta_id
-            analyses = tuple(analyze(r, detection=detection, n_boot=0,
-                                     flight_law=(mu_impacts, theta_id),
-                                     pulse=_instrument_of(a))
-                             for r, a in zip(recs, analyses))
-    data, laws = {}, {}
-    for side in SIDES:
-        data[side] = _pool(analyses, side)
-        d = data[side]
-        kws = {"seed": int(seed), "n_boot": int(n_boot), "level": float(level),
-               "criterion": criterion, "terms": terms, "min_effect": min_effect,
-               **dict(impact_kws or {})}
-        laws[side] = discover_impact_law(d["v"], d["r"], sigma=d["sigma"], groups=d["group"],
-                                         **kws)
-        if laws[side].warning:
-            warnings.append(f"{side} wall: {laws[side].warning}")
-        if laws[side].note:
-            warnings.append(f"{side} wall: {laws[side].note}")
+            flight_result, note = _flight_law(analyses, int(seed), int(n_boot), float(level),
+                                              max_tilt_deg, flight_kws)
+            if note:
+                warnings.append(note)
+        mu_impacts, theta_impacts = float(mu), 0.0
+        if flight_result is None or not flight_result.identified:
+            if flight:
+                warnings.append(f"impact laws fitted with the flights of the assumed law "
+                                f"(mu = {mu:g}, theta = 0"
+                                f"{': straight lines' if mu == 0 else ''}), not with a "
+                                "flight law")
+        elif refine_mu:
+            mu_id = float(flight_result.mu)
+            theta_id = float(flight_result.theta_deg)
+            theta_id = theta_id if abs(theta_id) >= 0.05 else 0.0
+            recs = [a.recording for a in analyses]
+            if (all(r is not None for r in recs)
+                    and ((mu_id > 0 and abs(mu_id - mu) > 0.005) or theta_id)):
+                mu_impacts, theta_impacts = min(max(mu_id, 0.0), 2.0), theta_id
+                analyses = tuple(run.map(_reanalysis, [
+                    (r, detection, (mu_impacts, theta_id), _instrument_of(a))
+                    for r, a in zip(recs, analyses)]))
+                data = {side: _pool(analyses, side) for side in SIDES}
+                ahead = {}
+        if not ahead:
+            ahead = {side: run.submit(_impact_law, data[side], kws) for side in SIDES[:-1]}
+        laws = {}
+        for side in SIDES:
+            laws[side] = run.result(ahead.get(side), _impact_law, data[side], kws)
+            if laws[side].warning:
+                warnings.append(f"{side} wall: {laws[side].warning}")
+            if laws[side].note:
+                warnings.append(f"{side} wall: {laws[side].note}")
+    finally:
+        run.close()
+        if bar is not None:
+            bar.close()
     return DiscoveryResult(recordings=tuple(a.name for a in analyses), analyses=analyses,
                            impact_data=data, impact_laws=laws, flight=flight_result,
                            mu=float(mu), mu_impacts=mu_impacts, theta_impacts=theta_impacts,
