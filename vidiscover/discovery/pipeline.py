@@ -300,6 +300,9 @@ class _Runner:
 
             self.executor = ProcessPoolExecutor(
                 max_workers=workers, mp_context=multiprocessing.get_context("fork"))
+            # fork the workers now, before this process starts any thread of its own
+            # (a progress bar's monitor): a fork copies no thread but may copy its locks
+            self.executor.submit(os.getpid)
 
     def submit(self, func: Callable, *args):
         """Start ``func(*args)`` in a worker; a handle for :meth:`result` (None: not started)."""
@@ -465,13 +468,13 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
            **dict(impact_kws or {})}
     # the analyses side by side; then the flight law here while workers fit the impact
     # laws on the same analyses (used unless the flight law sends them to be redone)
-    run = _Runner(n_jobs, max(len(items), 1 + len(SIDES)))
+    run = _Runner(n_jobs, max(len(items), 1 + len(SIDES)))   # forks here
     bar = None
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(total=len(items), desc="analyse", unit="rec")
     try:
+        if progress:
+            from tqdm import tqdm
+
+            bar = tqdm(total=len(items), desc="analyse", unit="rec")
         todo = [k for k, it in enumerate(items) if not isinstance(it, AnalysisResult)]
         done = run.map(_analysis_of, [(items[k], mu, detection, meta) for k in todo], bar)
         analyses = list(items)
