@@ -301,8 +301,15 @@ class _Runner:
             self.executor = ProcessPoolExecutor(
                 max_workers=workers, mp_context=multiprocessing.get_context("fork"))
             # fork the workers now, before this process starts any thread of its own
-            # (a progress bar's monitor): a fork copies no thread but may copy its locks
-            self.executor.submit(os.getpid)
+            # (a progress bar's monitor): a fork copies no thread but may copy its locks.
+            # Python >= 3.12 warns of a fork in a process with threads, counting the
+            # BLAS library's idle pool, which re-forms itself in the child
+            import warnings
+
+            with warnings.catch_warnings():
+                warnings.filterwarnings("ignore", message=r".*use of fork\(\) may lead",
+                                        category=DeprecationWarning)
+                self.executor.submit(os.getpid)
 
     def submit(self, func: Callable, *args):
         """Start ``func(*args)`` in a worker; a handle for :meth:`result` (None: not started)."""
