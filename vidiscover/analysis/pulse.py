@@ -596,8 +596,7 @@ class _Objective:
             ref = (dc_group_delay(kind, order, 0.25) * 0.25 / cs + shape_centroid(ss, pp) * ts
                    + extra)
         # models that coincide (durations clipped at zero, say) are evaluated once
-        _, first, inv = np.unique(np.column_stack([cs, ts, ss, pp, mm, zz]), axis=0,
-                                  return_index=True, return_inverse=True)
+        first, inv = _unique_rows(np.column_stack([cs, ts, ss, pp, mm, zz]))
         cs, ts, ss, pp, mm, zz, ref = (v[first] for v in (cs, ts, ss, pp, mm, zz, ref))
         G = self._responses(kind, order, halfwidth, cs, ts, ss, pp, mm, zz, ref)
         K = G[:, self.index[::stride]]                               # (M, S, W)
@@ -612,6 +611,23 @@ class _Objective:
         yy = np.sum(self.Y ** 2, axis=1)
         return np.stack([(float(np.sum(yy[rows])) - E[:, rows].sum(axis=1))
                          .reshape(cutoffs.size, taus.size) for rows in groups])
+
+
+def _unique_rows(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """``np.unique(X, axis=0, return_index=True, return_inverse=True)[1:]`` of a float table.
+
+    The same stable lexicographic order (``np.lexsort`` on the columns, as the record
+    sort numpy makes) and the same equality (``-0.0 == 0.0``), without the record
+    dtype's per-element compare calls.
+    """
+    perm = np.lexsort(X.T[::-1])
+    aux = X[perm]
+    mask = np.empty(X.shape[0], dtype=bool)
+    mask[:1] = True
+    mask[1:] = (aux[1:] != aux[:-1]).any(axis=1)
+    inv = np.empty(X.shape[0], dtype=np.intp)
+    inv[perm] = np.cumsum(mask) - 1
+    return perm[mask], inv
 
 
 def _strong_pulses(af: np.ndarray, bad: np.ndarray, fs: float, n_pulses: int,
