@@ -857,7 +857,7 @@ def _diagnose_with(rec, seed, names, an, run) -> GapReport:
                 selected = _split_pair(pair, fits)
     cis = {}
     for c in selected:
-        cis[c.name] = profile_ci(model, c)
+        cis[c.name] = profile_ci(model, c, run=run)
         n_sims += 1 + 2 * len(c.params)
     return GapReport(name=rec.name, model=model, nominal=nominal, candidates=fits,
                      selected=selected, significant=significant, n_sims=n_sims, cis=cis)

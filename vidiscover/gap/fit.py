@@ -728,8 +728,21 @@ def fit_candidate(model: Model, name: str, base: Effects | None = None,
 DIRECT = {"r_right": "right.r_level", "r_left": "left.r_level", "mu": "flights.drag"}
 
 
+def _profile_gap(item: tuple) -> float:
+    """Top-level worker of :func:`profile_ci`: the gap of one trial's effects.
+
+    The item is ``(model, effects, r, direct)``; not ``direct``, the nuisance
+    restitution is profiled out (:class:`_Objective`: the one r, or each wall's level
+    when the other effect of a pair sets them).
+    """
+    model, fx, r, direct = item
+    if direct:
+        return gap_of(model, simulate_signature(model, fx, r), fx).total
+    return _Objective(model, lambda _: fx, r)(0.0)
+
+
 def profile_ci(model: Model, fit: CandidateFit, level_delta: float = 3.84,
-               rel_step: float = 0.1) -> dict:
+               rel_step: float = 0.1, *, run=None) -> dict:
     """Approximate 95 % intervals of the fitted numeric parameters of ``fit``.
 
     The total gap is a sum of squared z-scores, so near its minimum it behaves like
@@ -743,7 +756,8 @@ def profile_ci(model: Model, fit: CandidateFit, level_delta: float = 3.84,
     interval of friction paired with unequal walls that held the walls fixed came out
     too narrow). A parameter that one statistic reads directly (:data:`DIRECT`)
     gets at least that statistic's resolution. String parameters
-    (restitution-law specs) get no interval.
+    (restitution-law specs) get no interval. ``run(worker, items)``: how the
+    independent trials are simulated (default: one after the other, here).
 
     Returns
     -------
@@ -756,42 +770,57 @@ def profile_ci(model: Model, fit: CandidateFit, level_delta: float = 3.84,
     base = fit.effects.without(fit.name)
     own_walls = fit.name in ("asymmetric_restitution", "velocity_dependent_restitution")
 
-    def gap_at(fx: Effects) -> float:
-        if own_walls or (not _sets_r(fx) and not np.isfinite(model.real.r_pooled)):
-            return gap_of(model, simulate_signature(model, fx, fit.r), fx).total
-        # the nuisance restitution profiled out: the one r, or each wall's level when
-        # the other effect of a pair sets them
-        return _Objective(model, lambda _: fx, fit.r)(0.0)
+    def item(fx: Effects) -> tuple:
+        return (model, fx, fit.r,
+                own_walls or (not _sets_r(fx) and not np.isfinite(model.real.r_pooled)))
 
-    g0 = gap_at(fit.effects)
+    def trial(key: str, step: float) -> tuple:
+        """The step and the effects at value -/+ step (None outside the validity range)."""
+        value = fit.params[key]
+        h = step * abs(value) if abs(value) > 1e-9 else 1e-3
+        fxs = []
+        for v in (value - h, value + h):
+            params = dict(fit.params)
+            params[key] = v
+            try:
+                fxs.append(base.with_effect(fit.name, **params))
+            except Exception:  # outside the validity range: one-sided
+                fxs.append(None)
+        return h, fxs
+
+    def curvature(g0: float, h: float, gs: list) -> float:
+        if None in gs:
+            g = [x for x in gs if x is not None]
+            return (g[0] - g0) / h ** 2 if g else 0.0
+        return (gs[0] + gs[1] - 2 * g0) / (2 * h ** 2)
+
+    def batch(fxs: list) -> list:
+        """Gaps at the effects ``fxs`` (None stays None), simulated as one batch."""
+        todo = [item(fx) for fx in fxs if fx is not None]
+        done = iter(run(_profile_gap, todo) if run is not None else
+                    [_profile_gap(x) for x in todo])
+        return [None if fx is None else next(done) for fx in fxs]
+
+    numeric = [k for k, v in fit.params.items()
+               if isinstance(v, (int, float)) and not isinstance(v, bool)]
+    # a gap that does not rise within +/- rel_step (flat at the noise level, or a
+    # simulation that fell on another attractor) is stepped three times as far once
+    # before the parameter is called undetermined; the trials of every parameter
+    # (and the fit itself) are independent: one batch per step size
+    first = {k: trial(k, rel_step) for k in numeric}
+    gaps = batch([fit.effects] + [fx for k in numeric for fx in first[k][1]])
+    g0 = gaps[0]
+    curv = {k: curvature(g0, first[k][0], gaps[1 + 2 * n:3 + 2 * n])
+            for n, k in enumerate(numeric)}
+    again = [k for k in numeric if not curv[k] > 0]
+    second = {k: trial(k, 3 * rel_step) for k in again}
+    gaps = batch([fx for k in again for fx in second[k][1]])
+    for n, k in enumerate(again):
+        curv[k] = curvature(g0, second[k][0], gaps[2 * n:2 * n + 2])
     out: dict = {}
     for key, value in fit.params.items():
-        if not isinstance(value, (int, float)) or isinstance(value, bool):
-            out[key] = None
-            continue
-        # a gap that does not rise within +/- rel_step (flat at the noise level, or
-        # a simulation that fell on another attractor) is stepped three times as far
-        # once before the parameter is called undetermined
-        for step in (rel_step, 3 * rel_step):
-            h = step * abs(value) if abs(value) > 1e-9 else 1e-3
-            gs = []
-            for v in (value - h, value + h):
-                params = dict(fit.params)
-                params[key] = v
-                try:
-                    fx = base.with_effect(fit.name, **params)
-                except Exception:  # outside the validity range: one-sided
-                    gs.append(None)
-                    continue
-                gs.append(gap_at(fx))
-            if None in gs:
-                g = [x for x in gs if x is not None]
-                a = (g[0] - g0) / h ** 2 if g else 0.0
-            else:
-                a = (gs[0] + gs[1] - 2 * g0) / (2 * h ** 2)
-            if a > 0:
-                break
-        if not a > 0:
+        a = curv.get(key)
+        if a is None or not a > 0:
             out[key] = None
             continue
         half = math.sqrt(level_delta / a)
