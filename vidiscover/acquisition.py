@@ -229,14 +229,19 @@ def _exp_rows(t: np.ndarray, P: np.ndarray) -> np.ndarray:
     if step is not None and (step > 0).all():
         j0 = np.argmax(t > 0, axis=1)                       # first point past the clip
         n = np.arange(N)[None, :] - j0[:, None]
-        uniform = np.abs(np.where(n >= 0, t - (t[np.arange(M), j0][:, None] + n * step), 0))
-        if uniform.max() <= 1e-9 * max(1.0, float(np.abs(t).max())):
+        # |t - (t[j0] + n step)| where n >= 0, else 0 (in one buffer)
+        dev = np.multiply(n, step)
+        np.add(t[np.arange(M), j0][:, None], dev, out=dev)
+        np.subtract(t, dev, out=dev)
+        np.abs(dev, out=dev)
+        first = n < 0
+        dev[first] = 0.0
+        if dev.max() <= 1e-9 * max(1.0, float(max(t.max(), -t.min()))):
             z = np.empty((M, N, P.shape[1]), dtype=complex)
             z[:] = np.exp(P[:, None, :] * step[:, :, None])
             z[np.arange(M), j0] = np.exp(P * t[np.arange(M), j0][:, None])
-            first = np.arange(N)[None, :] < j0[:, None]
             np.copyto(z, 1.0, where=first[:, :, None])
-            return np.cumprod(z, axis=1)
+            return np.cumprod(z, axis=1, out=z)
     return np.exp(t[..., None] * P[:, None, :])
 
 
