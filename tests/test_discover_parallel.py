@@ -48,3 +48,24 @@ def test_analyses_given_as_such_are_used_as_they_are(friction_recordings):
     an = analyze(friction_recordings[0], n_boot=0)
     res = discover([an], n_boot=0, flight=False, n_jobs=2)
     assert res.analyses[0] is an
+
+
+@pytest.mark.skipif(not _can_fork(), reason="workers are forked (Linux) or not used")
+@pytest.mark.parametrize("n_jobs", [1, 2])
+def test_an_error_in_a_worker_reaches_the_caller_as_it_is(friction_recordings, monkeypatch,
+                                                          n_jobs):
+    """A recording that cannot be analysed fails the call with its own InputError, whether
+    it was analysed here or in a worker (the workers fork with this patch in place)."""
+    import vidiscover.discovery.pipeline as pipeline
+
+    real = pipeline.analyze
+    first = friction_recordings[0]
+
+    def analyze(rec, **kw):   # a worker gets a copy of the second recording, not `first`
+        if rec is not first:
+            raise InputError("recording 2: no impacts found; check the file")
+        return real(rec, **kw)
+
+    monkeypatch.setattr(pipeline, "analyze", analyze)
+    with pytest.raises(InputError, match="recording 2: no impacts found"):
+        discover(friction_recordings[:2], n_boot=0, flight=False, n_jobs=n_jobs)
