@@ -344,3 +344,19 @@ def test_huge_and_tiny_scales(seed, col, exp):
         assert "units" in str(out)
     else:
         _check_valid(out, rec)
+
+
+@settings(max_examples=60, deadline=None)
+@given(half=st.integers(2, 300), polyorder=st.integers(1, 4), deriv=st.integers(0, 2),
+       delta=st.floats(1e-6, 10.0))
+def test_savgol_taps_are_scipys_savgol_coeffs_bit_for_bit(half, polyorder, deriv, delta):
+    """The analysis writes out scipy.signal.savgol_coeffs (its import costs 0.5-0.9 s):
+    same taps exactly, for any odd window, degree, derivative and spacing."""
+    from scipy.signal import savgol_coeffs
+
+    from vidiscover.analysis.signals import savgol_taps
+
+    win = 2 * half + 1
+    deriv = min(deriv, polyorder)
+    want = savgol_coeffs(win, polyorder, deriv=deriv, delta=delta, use="dot")
+    assert np.array_equal(savgol_taps(win, polyorder, deriv, delta), want)

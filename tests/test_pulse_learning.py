@@ -415,3 +415,33 @@ def test_a_mounted_resonance_s_ringing_is_not_counted():
     ie, it = match_impacts(det.t, t_in, 0.5e-3)
     assert ie.size == t_in.size
     assert det.n <= t_in.size + 12           # measured 105 of 94; 199 before the error envelope
+
+
+@pytest.mark.parametrize("kind", ["butter", "bessel", "cheby1"])
+def test_tabulated_prototype_poles_are_scipys_bit_for_bit(kind):
+    """The analog prototypes are tabulated (scipy.signal's import costs 0.5-0.9 s per
+    process): the table must be scipy's poles exactly, order by order."""
+    from vidiscover._prototypes import POLES, scipy_poles
+
+    for order in range(2, 9):
+        got = np.array([complex(re, im) for re, im in POLES[(kind, order)]])
+        want = scipy_poles(kind, order, CHEBY1_RIPPLE_DB)
+        assert got.shape == want.shape
+        assert np.array_equal(got.view(float), want.view(float)), (kind, order)
+
+
+def test_analysis_and_pulse_learning_do_not_import_scipy_signal():
+    """Analysing a recording, pulse learned, loads neither scipy.signal nor scipy.stats
+    (0.5-0.9 s of start-up per command or sweep worker)."""
+    code = ("import sys\n"
+            "from vidiscover.analysis import analyze\n"
+            "from vidiscover.params import preset\n"
+            "from vidiscover.workflows import simulate_to_memory\n"
+            "rec, _, _ = simulate_to_memory(preset('paper'), settle=1.0, duration=2.0)\n"
+            "sys.modules.pop('scipy.signal', None); sys.modules.pop('scipy.stats', None)\n"
+            "an = analyze(rec, n_boot=0)\n"
+            "assert an.detection.response is not None\n"
+            "print(sorted({'scipy.signal', 'scipy.stats'} & set(sys.modules)))")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout.strip()
+    assert out == "[]"

@@ -176,18 +176,20 @@ def _shape_weights(skews: np.ndarray, phases: np.ndarray | None = None) -> np.nd
 
 @functools.lru_cache(maxsize=64)
 def _unit_poles(kind: str, order: int) -> tuple[np.ndarray, np.ndarray]:
-    """Poles and residues (unit DC gain) of the low-pass at 1 rad per sample."""
-    from scipy import signal
+    """Poles and residues (unit DC gain) of the low-pass at 1 rad per sample.
 
-    if kind == "butter":
-        _, p, k = signal.butter(order, 1.0, analog=True, output="zpk")
-    elif kind == "bessel":
-        _, p, k = signal.bessel(order, 1.0, analog=True, output="zpk", norm="phase")
-    elif kind == "cheby1":
-        _, p, k = signal.cheby1(order, CHEBY1_RIPPLE_DB, 1.0, analog=True, output="zpk")
-    else:
+    The poles are scipy.signal's, tabulated in :mod:`vidiscover._prototypes` for the
+    orders the instrument models allow (importing scipy.signal costs 0.5-0.9 s).
+    """
+    from ._prototypes import POLES, scipy_poles
+
+    if kind not in CAUSAL_KINDS:
         raise InputError(f"{kind!r} is not a causal anti-alias kind ({', '.join(CAUSAL_KINDS)})")
-    p = np.asarray(p, dtype=complex)
+    table = POLES.get((kind, order))
+    if table is not None:
+        p = np.array([complex(re, im) for re, im in table], dtype=complex)
+    else:
+        p = np.asarray(scipy_poles(kind, order, CHEBY1_RIPPLE_DB), dtype=complex)
     k = np.prod(-p).real                           # unit DC gain: H(0) = 1
     res = np.array([k / np.prod(p[i] - np.delete(p, i)) for i in range(p.size)])
     p.flags.writeable = False

@@ -47,7 +47,7 @@ from ..params import G_ACCEL
 from ._table import check_columns, to_frame
 from .friction import integrate_flights, solve_flights
 from .impacts import ImpactDetection
-from .signals import fill_gaps, robust_std
+from .signals import fill_gaps, robust_std, savgol_taps
 
 if TYPE_CHECKING:      # pandas is imported where a table is built, not to analyse
     import pandas as pd
@@ -411,10 +411,8 @@ def _drift(tr, xl, x_raw, ok, fs, window):
 
 @functools.lru_cache(maxsize=8)
 def _quadratic_taps(win: int, h: float):
-    from scipy.signal import savgol_coeffs
-
-    c0 = savgol_coeffs(win, 2, use="dot")
-    c1 = savgol_coeffs(win, 2, deriv=1, delta=h, use="dot")
+    c0 = savgol_taps(win, 2)
+    c1 = savgol_taps(win, 2, deriv=1, delta=h)
     j = np.arange(win, dtype=float) - win // 2
     P = np.linalg.pinv(np.vander(j, 3, increasing=True))   # coefficients of the quadratic
     return c0, c1, P

@@ -20,13 +20,12 @@ from dataclasses import dataclass
 
 import numpy as np
 from scipy.ndimage import correlate1d
-from scipy.signal import savgol_coeffs
 
 from ..errors import InputError
 
 __all__ = ["Forcing", "check_recording", "robust_std", "fill_gaps", "bridge_gaps",
-           "clipped_mask", "fit_forcing", "savgol_smooth", "Offsets", "estimate_offsets",
-           "MIN_SAMPLES", "MAX_DISPLACEMENT", "MAX_ACCELERATION"]
+           "clipped_mask", "fit_forcing", "savgol_smooth", "savgol_taps", "Offsets",
+           "estimate_offsets", "MIN_SAMPLES", "MAX_DISPLACEMENT", "MAX_ACCELERATION"]
 
 #: Fewest samples an analysis accepts (10 ms at 6400 Hz): shorter records cannot
 #: hold one impact pulse with its acquisition kernel.
@@ -234,11 +233,46 @@ def bridge_gaps(y: np.ndarray, bad: np.ndarray, degree: int = 4) -> np.ndarray:
     return out
 
 
+def savgol_taps(win: int, polyorder: int, deriv: int = 0, delta: float = 1.0) -> np.ndarray:
+    """Centred Savitzky-Golay taps, as ``scipy.signal.savgol_coeffs(..., use="dot")``.
+
+    The same least-squares problem solved the same way (scipy.linalg.lstsq, scipy's
+    ``cond``), so the same taps bit for bit (a test checks it): written out because
+    importing scipy.signal costs 0.5-0.9 s per process (it imports scipy.stats), which
+    every command and sweep worker that analyses a recording would pay for these taps.
+
+    Parameters
+    ----------
+    win : int
+        Odd window length (samples), > ``polyorder``.
+    polyorder : int
+        Degree of the local polynomial.
+    deriv : int, optional
+        Order of the derivative the taps evaluate at the window's centre.
+    delta : float, optional
+        Sample spacing, for derivatives.
+
+    Returns
+    -------
+    ndarray
+        ``win`` taps; ``taps @ y[j - win // 2: j + win // 2 + 1]`` is the fit's value (or
+        derivative) at ``j``.
+    """
+    from scipy.linalg import lstsq
+
+    h = win // 2
+    x = np.arange(-h, win - h, dtype=np.float64)
+    A = x ** np.arange(polyorder + 1, dtype=np.float64).reshape(-1, 1)
+    y = np.zeros(polyorder + 1)
+    y[deriv] = math.factorial(deriv) / delta ** deriv
+    return lstsq(A, y, cond=np.finfo(np.float64).eps * max(A.shape))[0]
+
+
 @functools.lru_cache(maxsize=8)
 def _savgol_parts(win: int):
     """Savitzky-Golay (cubic) taps and the edge projections of mode 'interp'."""
     h = win // 2
-    taps = savgol_coeffs(win, 3, use="dot")
+    taps = savgol_taps(win, 3)
     j = np.arange(win, dtype=float)
     V = np.vander(j - h, 4, increasing=True)
     proj = V @ np.linalg.pinv(V)                    # fit a cubic to the edge window
