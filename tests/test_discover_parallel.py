@@ -10,8 +10,8 @@ from __future__ import annotations
 import pytest
 
 from vidiscover import Effects, preset, record, simulate
+from vidiscover._workers import can_fork
 from vidiscover.discovery import discover
-from vidiscover.discovery.pipeline import _can_fork
 from vidiscover.errors import InputError
 
 
@@ -22,7 +22,7 @@ def friction_recordings():
             for k, b in enumerate((0.006, 0.0075, 0.009))]
 
 
-@pytest.mark.skipif(not _can_fork(), reason="workers are forked (Linux) or not used")
+@pytest.mark.skipif(not can_fork(), reason="workers are forked (Linux) or not used")
 def test_workers_give_the_serial_result_also_when_the_flight_law_refines(
         friction_recordings):
     one = discover(friction_recordings, n_boot=20, n_jobs=1)
@@ -50,7 +50,7 @@ def test_analyses_given_as_such_are_used_as_they_are(friction_recordings):
     assert res.analyses[0] is an
 
 
-@pytest.mark.skipif(not _can_fork(), reason="workers are forked (Linux) or not used")
+@pytest.mark.skipif(not can_fork(), reason="workers are forked (Linux) or not used")
 @pytest.mark.parametrize("n_jobs", [1, 2])
 def test_an_error_in_a_worker_reaches_the_caller_as_it_is(friction_recordings, monkeypatch,
                                                           n_jobs):

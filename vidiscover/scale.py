@@ -17,6 +17,7 @@ import os
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
+from vidiscover._workers import n_workers as _n_workers
 from vidiscover.errors import InputError
 
 __all__ = ["parallel_map"]
@@ -85,17 +86,6 @@ def _chunks(items: Sequence[Any], n_workers: int) -> list[list[Any]]:
     """Split ``items`` into contiguous chunks, about ``_CHUNKS_PER_WORKER`` per worker."""
     size = max(1, math.ceil(len(items) / (n_workers * _CHUNKS_PER_WORKER)))
     return [list(items[i : i + size]) for i in range(0, len(items), size)]
-
-
-def _check_n_jobs(n_jobs: int | None) -> int:
-    """Return the number of worker processes for ``n_jobs`` (``None`` -> all cores)."""
-    if n_jobs is None:
-        return os.cpu_count() or 1
-    if isinstance(n_jobs, bool) or not isinstance(n_jobs, int) or n_jobs < 1:
-        raise InputError(
-            f"n_jobs must be a positive integer or None (all cores), was {n_jobs!r}"
-        )
-    return n_jobs
 
 
 def _progress(total: int, progress: bool, desc: str):
@@ -229,7 +219,7 @@ def parallel_map(
     [1.0, 2.0, 3.0]
     """
     items = list(items)
-    n_workers = _check_n_jobs(n_jobs) if scheduler is None else 1
+    n_workers = _n_workers(n_jobs) if scheduler is None else 1
     with _progress(len(items), progress, desc) as bar:
         if scheduler is not None:
             return _run_dask(func, items, scheduler, bar) if items else []

@@ -39,7 +39,6 @@ from __future__ import annotations
 
 import math
 import os
-import sys
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -49,6 +48,7 @@ import numpy as np
 import pandas as pd
 
 from .._atomic import to_jsonable
+from .._workers import can_fork, fork_executor, n_workers
 from ..analysis import AnalysisResult, DetectionOptions, analyze
 from ..errors import InputError
 from ..recording import Recording
@@ -260,15 +260,6 @@ def _instrument_of(analysis: AnalysisResult):
 
 
 # --------------------------------------------------------------------- processes
-def _can_fork() -> bool:
-    """Whether this process may fork workers: Linux, and not a daemonic worker itself."""
-    import multiprocessing
-
-    return (sys.platform.startswith("linux")
-            and "fork" in multiprocessing.get_all_start_methods()
-            and not multiprocessing.current_process().daemon)
-
-
 class _Runner:
     """Independent tasks in forked copies of this process, this one taking its share.
 
@@ -282,34 +273,17 @@ class _Runner:
     """
 
     def __init__(self, n_jobs: int | None, width: int) -> None:
-        if n_jobs is not None and (isinstance(n_jobs, bool) or not isinstance(n_jobs, int)
-                                   or n_jobs < 1):
-            raise InputError(f"n_jobs must be a positive integer or None (all cores), "
-                             f"was {n_jobs!r}")
-        cores = (os.cpu_count() or 1) if n_jobs is None else n_jobs
+        cores = n_workers(n_jobs)
         workers = min(width - 1, 2 * cores - 1)
         self.executor = None
-        if cores > 1 and workers >= 1 and _can_fork():
-            import multiprocessing
-            from concurrent.futures import ProcessPoolExecutor
-
+        if cores > 1 and workers >= 1 and can_fork():
             # what every task needs, imported once before the workers fork
             import pysindy  # noqa: F401
             import scipy.optimize  # noqa: F401
             import scipy.special  # noqa: F401
 
-            self.executor = ProcessPoolExecutor(
-                max_workers=workers, mp_context=multiprocessing.get_context("fork"))
-            # fork the workers now, before this process starts any thread of its own
-            # (a progress bar's monitor): a fork copies no thread but may copy its locks.
-            # Python >= 3.12 warns of a fork in a process with threads, counting the
-            # BLAS library's idle pool, which re-forms itself in the child
-            import warnings
-
-            with warnings.catch_warnings():
-                warnings.filterwarnings("ignore", message=r".*use of fork\(\) may lead",
-                                        category=DeprecationWarning)
-                self.executor.submit(os.getpid)
+            # forked now, before this process starts a thread of its own (the bar's)
+            self.executor = fork_executor(workers)
 
     def submit(self, func: Callable, *args):
         """Start ``func(*args)`` in a worker; a handle for :meth:`result` (None: not started)."""

@@ -14,14 +14,13 @@ import collections
 import concurrent.futures
 import dataclasses
 import math
-import os
-import sys
 import threading
 from dataclasses import dataclass, field
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from .._workers import fork_executor, n_workers
 from ..effects import Effects
 from ..errors import InputError
 from .components import GROUPS, STATS, compare, measure, mirror, noise_scales
@@ -686,24 +685,12 @@ class _Runner:
     """
 
     def __init__(self, n_jobs: int | None, scheduler) -> None:
-        if n_jobs is not None and (isinstance(n_jobs, bool) or not isinstance(n_jobs, int)
-                                   or n_jobs < 1):
-            raise InputError(f"n_jobs must be a positive integer or None (all cores), "
-                             f"was {n_jobs!r}")
+        n = n_workers(n_jobs) if scheduler is None else 1
         self.scheduler = scheduler
-        self.executor = None
+        self.executor = fork_executor(n - 1) if n > 1 else None
         self.warm: list = []
-        self.forked = False
-        n = (n_jobs or os.cpu_count() or 1) if scheduler is None else 1
-        if n > 1 and sys.platform.startswith("linux"):
-            import multiprocessing
-
-            sys.stdout.flush()         # a fork must not write this process' buffers again
-            sys.stderr.flush()
-            self.executor = concurrent.futures.ProcessPoolExecutor(
-                n - 1, mp_context=multiprocessing.get_context("fork"))
-            self.forked = True
-        elif n > 1:
+        self.forked = self.executor is not None
+        if n > 1 and not self.forked:
             from joblib.externals.loky import get_reusable_executor
 
             self.executor = get_reusable_executor(max_workers=n - 1, timeout=300,
