@@ -348,8 +348,8 @@ def test_huge_and_tiny_scales(seed, col, exp):
 
 @settings(max_examples=60, deadline=None)
 @given(half=st.integers(2, 300), polyorder=st.integers(1, 4), deriv=st.integers(0, 2),
-       delta=st.floats(1e-6, 10.0))
-def test_savgol_taps_are_scipys_savgol_coeffs_bit_for_bit(half, polyorder, deriv, delta):
+       delta=st.floats(1e-6, 10.0), use=st.sampled_from(["dot", "conv"]))
+def test_savgol_taps_are_scipys_savgol_coeffs_bit_for_bit(half, polyorder, deriv, delta, use):
     """The analysis writes out scipy.signal.savgol_coeffs (its import costs 0.5-0.9 s):
     same taps exactly, for any odd window, degree, derivative and spacing."""
     from scipy.signal import savgol_coeffs
@@ -358,5 +358,5 @@ def test_savgol_taps_are_scipys_savgol_coeffs_bit_for_bit(half, polyorder, deriv
 
     win = 2 * half + 1
     deriv = min(deriv, polyorder)
-    want = savgol_coeffs(win, polyorder, deriv=deriv, delta=delta, use="dot")
-    assert np.array_equal(savgol_taps(win, polyorder, deriv, delta), want)
+    want = savgol_coeffs(win, polyorder, deriv=deriv, delta=delta, use=use)
+    assert np.array_equal(savgol_taps(win, polyorder, deriv, delta, use=use), want)

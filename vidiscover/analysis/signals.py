@@ -233,8 +233,9 @@ def bridge_gaps(y: np.ndarray, bad: np.ndarray, degree: int = 4) -> np.ndarray:
     return out
 
 
-def savgol_taps(win: int, polyorder: int, deriv: int = 0, delta: float = 1.0) -> np.ndarray:
-    """Centred Savitzky-Golay taps, as ``scipy.signal.savgol_coeffs(..., use="dot")``.
+def savgol_taps(win: int, polyorder: int, deriv: int = 0, delta: float = 1.0,
+                use: str = "dot") -> np.ndarray:
+    """Centred Savitzky-Golay taps, as ``scipy.signal.savgol_coeffs(..., use=use)``.
 
     The same least-squares problem solved the same way (scipy.linalg.lstsq, scipy's
     ``cond``), so the same taps bit for bit (a test checks it): written out because
@@ -251,17 +252,22 @@ def savgol_taps(win: int, polyorder: int, deriv: int = 0, delta: float = 1.0) ->
         Order of the derivative the taps evaluate at the window's centre.
     delta : float, optional
         Sample spacing, for derivatives.
+    use : {"dot", "conv"}, optional
+        "dot": ``taps @ y[j - win // 2: j + win // 2 + 1]`` is the fit's value (or
+        derivative) at ``j``; "conv": the taps for a convolution, solved on the
+        reversed abscissa as scipy does (``savgol_filter``'s, bit for bit).
 
     Returns
     -------
     ndarray
-        ``win`` taps; ``taps @ y[j - win // 2: j + win // 2 + 1]`` is the fit's value (or
-        derivative) at ``j``.
+        ``win`` taps.
     """
     from scipy.linalg import lstsq
 
     h = win // 2
     x = np.arange(-h, win - h, dtype=np.float64)
+    if use == "conv":
+        x = x[::-1]
     A = x ** np.arange(polyorder + 1, dtype=np.float64).reshape(-1, 1)
     y = np.zeros(polyorder + 1)
     y[deriv] = math.factorial(deriv) / delta ** deriv
