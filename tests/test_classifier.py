@@ -300,13 +300,6 @@ def test_rule_baseline_applies_the_design_rules():
     assert list(RuleBaseline().predict(pd.DataFrame(rows))) == [
         "2ipc_asym", "2ipc_sym", "no_impact", "smr", "chaotic", "chaotic", "multi_ipc",
         "1ipc"]
-    # periodic means x AND x' repeat (the labels' test): the state's error decides where
-    # it is known, x alone where it is NaN or missing (older analyses)
-    state = [{**base, "strobe_state_error": 0.03}, {**base, "strobe_state_error": 0.005,
-                                                     "strobe_period_error": 0.2},
-             {**base, "strobe_state_error": float("nan")}]
-    assert list(RuleBaseline().predict(pd.DataFrame(state))) == [
-        "chaotic", "2ipc_asym", "2ipc_asym"]
 
 
 # --------------------------------------------------------------------------- shipped model

@@ -227,9 +227,7 @@ class RuleBaseline:
 
     ``impacts_per_cycle`` < 0.05 -> ``no_impact``; ``impacting_cycle_share`` < 0.9 and
     ``envelope_modulation`` >= 0.15 -> ``smr``; otherwise, when the share is >= 0.9
-    and the response is periodic (``strobe_state_error`` <= ``periodic_tol``: the
-    stroboscopic x and x' repeat, as the labels ask; ``strobe_period_error``, x
-    alone, where the state's error is missing or NaN):
+    and the response is periodic (``strobe_period_error`` <= ``periodic_tol``):
     ``one_per_cycle_share`` >= 0.9 -> ``1ipc``; ``two_per_cycle_share`` >= 0.9 and
     ``alternation`` >= 0.9 -> ``2ipc_asym`` if ``asymmetry`` >= 0.1 else
     ``2ipc_sym``; else ``multi_ipc``. Everything else is ``chaotic``.
@@ -245,21 +243,15 @@ class RuleBaseline:
     FEATURES: ClassVar[tuple[str, ...]] = (
         "impacts_per_cycle", "impacting_cycle_share", "envelope_modulation",
         "strobe_period_error", "one_per_cycle_share", "two_per_cycle_share", "alternation",
-        "asymmetry", "strobe_state_error")
+        "asymmetry")
 
     def predict(self, features: pd.DataFrame) -> np.ndarray:
-        """Label every row of a DataFrame of features (columns named as in ALL_FEATURES).
-
-        ``strobe_state_error`` may be missing (analyses made before it existed).
-        """
-        f = {k: (features[k].to_numpy(float) if k in features
-                 else np.full(len(features), np.nan)) for k in self.FEATURES}
+        """Label every row of a DataFrame of features (columns named as in ALL_FEATURES)."""
+        f = {k: features[k].to_numpy(float) for k in self.FEATURES}
         with np.errstate(invalid="ignore"):
             ipc = np.nan_to_num(f["impacts_per_cycle"])
             phi = np.nan_to_num(f["impacting_cycle_share"])
-            state = f["strobe_state_error"]
-            periodic = np.where(np.isnan(state), f["strobe_period_error"],
-                                state) <= self.periodic_tol
+            periodic = f["strobe_period_error"] <= self.periodic_tol
             one = f["one_per_cycle_share"] >= 0.9
             two = (f["two_per_cycle_share"] >= 0.9) & (f["alternation"] >= 0.9)
             asym = np.nan_to_num(f["asymmetry"]) >= 0.1
