@@ -26,7 +26,7 @@ from vidiscover.regimes.classifier import (
     save_model,
 )
 from vidiscover.regimes.dataset import PARAM_RANGES, draw_cases, draw_realism_cases, generate
-from vidiscover.regimes.features import ALL_FEATURES, REGIME_FEATURES
+from vidiscover.regimes.features import ALL_FEATURES, REGIME_FEATURES, STATE_FEATURES
 from vidiscover.workflows import simulate_to_memory
 
 T = 0.125
@@ -123,10 +123,11 @@ def test_bursts_and_modulation():
 def test_strobe_state_error_reads_the_velocity_the_displacement_strobe_misses():
     """The labels call a motion periodic when x AND x' repeat at the cycle starts; a
     modulation that vanishes at phase 0 leaves x(c_k) periodic and moves x'(c_k)."""
-    pure = _all(_ctx(*_locked()))
+    feats = ALL_FEATURES | STATE_FEATURES
+    pure = compute_features(_ctx(*_locked()), feats)
     assert pure["strobe_state_error"] < 1e-4 and pure["strobe_period_error"] < 1e-9
-    mod = _all(_ctx(*_locked(), x=lambda s: 0.005 * np.sin(2 * np.pi * 8 * s)
-                    * (1 + 0.03 * np.sin(2 * np.pi * 1.37 * s))))
+    mod = compute_features(_ctx(*_locked(), x=lambda s: 0.005 * np.sin(2 * np.pi * 8 * s)
+                                * (1 + 0.03 * np.sin(2 * np.pi * 1.37 * s))), feats)
     assert mod["strobe_period_error"] < 1e-9                  # x(c_k) = 0 in every cycle
     # x'(c_k) = 0.005 w (1 + 0.03 sin(...)); the modulation advances 0.17 of its period
     # per cycle: p = 1 changes x' by up to 2 x 0.03 sin(0.17 pi) = 0.031 of its size,
