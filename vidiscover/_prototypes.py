@@ -5,10 +5,12 @@ evaluate causal anti-alias filters (Butterworth; Bessel, phase-normalised; Cheby
 type I with ``CHEBY1_RIPPLE_DB`` ripple; orders 2-8) from these poles. They are
 scipy.signal's (``butter``/``bessel``/``cheby1`` with ``analog=True, output="zpk"``),
 tabulated here because importing :mod:`scipy.signal` costs 0.5-0.9 s (it imports
-:mod:`scipy.stats`), which every ``analyze``, ``discover`` and ``gap`` command and every
-sweep worker would otherwise pay for 21 constant arrays. The floats are written with
-``repr``, so they read back bit for bit; ``tests/test_acquisition.py`` checks them
-against scipy.signal, and ``python -m vidiscover._prototypes`` prints the table afresh.
+:mod:`scipy.stats`), which every analysis of a recording (the ``analyze`` command, a
+sweep worker, a script) would otherwise pay for 21 constant arrays. (``discover`` and
+``gap`` still load it: pysindy imports it, and the gap's residual spectrum uses
+``welch``.) The floats are written with ``repr``, so they read back bit for bit;
+``tests/test_pulse_learning.py`` checks them against scipy.signal, and
+``python -m vidiscover._prototypes`` prints the table afresh.
 """
 
 from __future__ import annotations

@@ -240,7 +240,8 @@ def savgol_taps(win: int, polyorder: int, deriv: int = 0, delta: float = 1.0,
     The same least-squares problem solved the same way (scipy.linalg.lstsq, scipy's
     ``cond``), so the same taps bit for bit (a test checks it): written out because
     importing scipy.signal costs 0.5-0.9 s per process (it imports scipy.stats), which
-    every command and sweep worker that analyses a recording would pay for these taps.
+    every process that analyses a recording (the ``analyze`` command, a sweep worker)
+    would pay for these taps.
 
     Parameters
     ----------
