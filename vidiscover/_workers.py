@@ -17,7 +17,7 @@ import sys
 
 from .errors import InputError
 
-__all__ = ["n_workers", "can_fork", "fork_executor"]
+__all__ = ["n_workers", "can_fork", "fork_executor", "WorkerPool"]
 
 
 def n_workers(n_jobs: int | None) -> int:
@@ -76,3 +76,167 @@ def fork_executor(max_workers: int):
                                 category=DeprecationWarning)
         executor.submit(os.getpid)     # a fork pool forks all its workers in its first submit
     return executor
+
+
+class WorkerPool:
+    """Independent tasks shared between this process and ``n`` worker processes.
+
+    One runner for every stage that runs independent tasks side by side (the
+    analyses and impact laws of :func:`~vidiscover.discovery.discover`, the candidate
+    fits of :func:`~vidiscover.gap.diagnose`):
+
+    * :meth:`map` keeps one queue of tasks, the costliest first; this process and
+      every worker take the next task when they are free, so no core waits for a
+      worker still starting and no task waits behind a long one it could pass;
+    * :meth:`submit` / :meth:`result` start one task ahead while this process does
+      something else;
+    * a task lost with its worker (killed, out of memory) is run again here;
+    * a task's exception is raised in the caller, after the running tasks are done.
+
+    A task gives the same result wherever it runs, so results never depend on the
+    number of workers. On Linux the workers are forks of this process
+    (:func:`fork_executor`: they start with its imports and inputs in memory, in
+    about 0.1 s). Elsewhere, or inside a daemonic worker, there are no workers and
+    this process runs every task, unless ``spawn_env`` asks for loky's reusable
+    spawned workers (with that environment), which outlive the pool.
+
+    Parameters
+    ----------
+    n : int
+        Worker processes besides this one (0: run everything here).
+    warm_up : callable, optional
+        Run once in each worker when it starts (imports, caches); a worker takes
+        tasks after its warm-up, and not at all if the warm-up fails.
+    spawn_env : dict, optional
+        Environment of loky's workers where forking is not available; None: no
+        spawned workers.
+    """
+
+    def __init__(self, n: int, *, warm_up=None, spawn_env: dict | None = None) -> None:
+        self.executor = fork_executor(n) if n >= 1 else None
+        self.forked = self.executor is not None
+        if n >= 1 and not self.forked and spawn_env is not None:
+            from joblib.externals.loky import get_reusable_executor
+
+            self.executor = get_reusable_executor(max_workers=n, timeout=300, env=spawn_env)
+        self.ready: list = []
+        if self.executor is not None:
+            self.ready = [self.executor.submit(warm_up or os.getpid) for _ in range(n)]
+
+    def __enter__(self) -> WorkerPool:
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def close(self) -> None:
+        """Stop forked workers (loky's reusable ones stay for the next pool)."""
+        if self.forked and self.executor is not None:
+            self.executor.shutdown(wait=True, cancel_futures=True)
+        self.executor = None
+        self.ready = []
+
+    def submit(self, func, *args):
+        """Start ``func(*args)`` in a worker; a handle for :meth:`result` (None: not started)."""
+        if self.executor is None:
+            return None
+        from concurrent.futures.process import BrokenProcessPool
+
+        try:
+            return self.executor.submit(func, *args)
+        except (BrokenProcessPool, RuntimeError):
+            return None
+
+    @staticmethod
+    def result(handle, func, *args):
+        """The result of a :meth:`submit`: computed here if not started yet, or lost."""
+        if handle is None or handle.cancel():
+            return func(*args)
+        from concurrent.futures.process import BrokenProcessPool
+
+        try:
+            return handle.result()
+        except BrokenProcessPool:        # the worker died (e.g. out of memory): redo it here
+            return func(*args)
+
+    def map(self, func, items, *, cost=None, bar=None) -> list:
+        """``[func(i) for i in items]``, shared with the workers.
+
+        Parameters
+        ----------
+        func : callable
+            A module-level function (it is pickled by reference) of one item.
+        items : iterable
+        cost : callable, optional
+            ``cost(item)``: a task's relative cost; the costliest are started first.
+        bar : tqdm, optional
+            Advanced by one per finished task.
+        """
+        import threading
+        from collections import deque
+
+        items = list(items)
+        out: list = [None] * len(items)
+        lock = threading.Lock()
+
+        def finished(i: int, value) -> None:
+            out[i] = value
+            if bar is not None:
+                with lock:
+                    bar.update(1)
+
+        if self.executor is None or len(items) <= 1:
+            for i, item in enumerate(items):
+                finished(i, func(item))
+            return out
+        order = sorted(range(len(items)), key=lambda i: -cost(items[i])) \
+            if cost is not None else list(range(len(items)))
+        queue = deque(order)
+        lost: list[int] = []
+        errors: list[BaseException] = []
+
+        def take():
+            with lock:
+                return queue.popleft() if queue else None
+
+        def remote(ready) -> None:
+            import concurrent.futures
+            from concurrent.futures.process import BrokenProcessPool
+
+            while not ready.done():       # a worker still starting takes nothing
+                if not queue:
+                    return
+                concurrent.futures.wait([ready], timeout=0.02)
+            if ready.exception() is not None:
+                return
+            while (i := take()) is not None:
+                handle = self.submit(func, items[i])
+                try:
+                    if handle is None:           # the pool is gone
+                        raise BrokenProcessPool
+                    value = handle.result()
+                except BrokenProcessPool:        # lost with its worker: redo it here
+                    with lock:
+                        lost.append(i)
+                    return
+                except BaseException as exc:  # noqa: BLE001 - raised again in the caller
+                    errors.append(exc)
+                    return
+                finished(i, value)
+
+        threads = [threading.Thread(target=remote, args=(r,), daemon=True) for r in self.ready]
+        for t in threads:
+            t.start()
+        try:
+            while (i := take()) is not None:
+                finished(i, func(items[i]))
+        finally:
+            with lock:
+                queue.clear()
+            for t in threads:
+                t.join()
+        if errors:
+            raise errors[0]
+        for i in lost:
+            finished(i, func(items[i]))
+        return out

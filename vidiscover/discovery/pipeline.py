@@ -39,7 +39,7 @@ from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -48,7 +48,7 @@ import numpy as np
 import pandas as pd
 
 from .._atomic import to_jsonable
-from .._workers import can_fork, fork_executor, n_workers
+from .._workers import WorkerPool, can_fork, n_workers
 from ..analysis import AnalysisResult, DetectionOptions, analyze
 from ..errors import InputError
 from ..recording import Recording
@@ -260,77 +260,33 @@ def _instrument_of(analysis: AnalysisResult):
 
 
 # --------------------------------------------------------------------- processes
-class _Runner:
-    """Independent tasks in forked copies of this process, this one taking its share.
+def _workers_for(n_jobs: int | None, width: int) -> WorkerPool:
+    """Forked workers for a discovery's independent tasks (:class:`WorkerPool`).
 
-    Forked workers start with this process's modules imported and its inputs in
-    memory (a spawned worker would pay ~1 s of imports, as long as an analysis);
-    each task's result is sent back pickled. ``width - 1`` workers (``width``: the
-    most tasks at once, this process running one), at most ``2 n_jobs - 1``, so that
-    e.g. three analyses on two cores run side by side (1.5 analyses long, not two in
-    a row). A task gives the same result in a worker as here; ``n_jobs == 1``, or no
-    fork (not Linux, or inside a daemonic worker), runs everything here.
+    ``width - 1`` workers (``width``: the most tasks at once, this process running
+    one), at most ``2 n_jobs - 1``, so that e.g. three analyses on two cores run side
+    by side (1.5 analyses long, not two in a row). ``n_jobs == 1``, or no fork (not
+    Linux, or inside a daemonic worker), runs everything here.
     """
+    cores = n_workers(n_jobs)
+    workers = min(width - 1, 2 * cores - 1)
+    if cores > 1 and workers >= 1 and can_fork():
+        # what every task needs, imported once before the workers fork
+        import pysindy  # noqa: F401
+        import scipy.optimize  # noqa: F401
+        import scipy.special  # noqa: F401
 
-    def __init__(self, n_jobs: int | None, width: int) -> None:
-        cores = n_workers(n_jobs)
-        workers = min(width - 1, 2 * cores - 1)
-        self.executor = None
-        if cores > 1 and workers >= 1 and can_fork():
-            # what every task needs, imported once before the workers fork
-            import pysindy  # noqa: F401
-            import scipy.optimize  # noqa: F401
-            import scipy.special  # noqa: F401
+        # forked now, before this process starts a thread of its own (the bar's)
+        return WorkerPool(workers)
+    return WorkerPool(0)
 
-            # forked now, before this process starts a thread of its own (the bar's)
-            self.executor = fork_executor(workers)
 
-    def submit(self, func: Callable, *args):
-        """Start ``func(*args)`` in a worker; a handle for :meth:`result` (None: not started)."""
-        if self.executor is None:
-            return None
-        from concurrent.futures.process import BrokenProcessPool
+def _analysis_task(task: tuple) -> AnalysisResult:
+    return _analysis_of(*task)
 
-        try:
-            return self.executor.submit(func, *args)
-        except (BrokenProcessPool, RuntimeError):
-            return None
 
-    @staticmethod
-    def result(handle, func: Callable, *args):
-        """The result of a :meth:`submit`, computed here if it was not started or was lost."""
-        if handle is None or handle.cancel():
-            return func(*args)
-        from concurrent.futures.process import BrokenProcessPool
-
-        try:
-            return handle.result()
-        except BrokenProcessPool:        # a worker died (e.g. out of memory): redo it here
-            return func(*args)
-
-    def map(self, func: Callable, tasks: Sequence[tuple], bar=None) -> list:
-        """``[func(*t) for t in tasks]``: this process runs the first and any not started."""
-        if not tasks:
-            return []
-        handles = [None] + [self.submit(func, *t) for t in tasks[1:]]
-        out = [None] * len(tasks)
-        done = [False] * len(tasks)
-        for k in [0, *range(len(tasks) - 1, 0, -1)]:
-            if k == 0 or handles[k] is None or handles[k].cancel():
-                out[k], done[k] = func(*tasks[k]), True
-                if bar is not None:
-                    bar.update(1)
-        for k in range(1, len(tasks)):
-            if not done[k]:
-                out[k] = self.result(handles[k], func, *tasks[k])
-                if bar is not None:
-                    bar.update(1)
-        return out
-
-    def close(self) -> None:
-        if self.executor is not None:
-            self.executor.shutdown(wait=True, cancel_futures=True)
-            self.executor = None
+def _reanalysis_task(task: tuple) -> AnalysisResult:
+    return _reanalysis(*task)
 
 
 def _pool(analyses: Sequence[AnalysisResult], side: str) -> pd.DataFrame:
@@ -449,7 +405,7 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
            **dict(impact_kws or {})}
     # the analyses side by side; then the flight law here while workers fit the impact
     # laws on the same analyses (used unless the flight law sends them to be redone)
-    run = _Runner(n_jobs, max(len(items), 1 + len(SIDES)))   # forks here
+    run = _workers_for(n_jobs, max(len(items), 1 + len(SIDES)))   # forks here
     bar = None
     try:
         if progress:
@@ -457,7 +413,8 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
 
             bar = tqdm(total=len(items), desc="analyse", unit="rec")
         todo = [k for k, it in enumerate(items) if not isinstance(it, AnalysisResult)]
-        done = run.map(_analysis_of, [(items[k], mu, detection, meta) for k in todo], bar)
+        done = run.map(_analysis_task, [(items[k], mu, detection, meta) for k in todo],
+                       bar=bar)
         analyses = list(items)
         for k, a in zip(todo, done, strict=True):
             analyses[k] = a
@@ -490,7 +447,7 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
             if (all(r is not None for r in recs)
                     and ((mu_id > 0 and abs(mu_id - mu) > 0.005) or theta_id)):
                 mu_impacts, theta_impacts = min(max(mu_id, 0.0), 2.0), theta_id
-                analyses = tuple(run.map(_reanalysis, [
+                analyses = tuple(run.map(_reanalysis_task, [
                     (r, detection, (mu_impacts, theta_id), _instrument_of(a))
                     for r, a in zip(recs, analyses)]))
                 data = {side: _pool(analyses, side) for side in SIDES}
