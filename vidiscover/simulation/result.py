@@ -113,6 +113,93 @@ class ImpactTable:
         return out
 
 
+#: Grids of at least this many instants are evaluated segment by segment when sorted
+#: (:func:`_segment_runs`); smaller ones by the general path.
+_MIN_RUNS = 64
+
+
+def _segment_runs(t0s: np.ndarray, t: np.ndarray):
+    """The segments of a sorted grid ``t`` as runs: ``(j0, j1, counts)`` or None.
+
+    ``counts[k]`` instants of ``t``, after each other, lie in segment ``j0 + k``,
+    exactly the segments ``clip(searchsorted(t0s, t, "right") - 1, 0, n - 1)`` gives
+    (segment starts ``t0s`` sorted): one search per segment start instead of one per
+    instant. None when ``t`` is short, not 1-D or not sorted (NaN included).
+    """
+    n = t.size
+    if t.ndim != 1 or n < _MIN_RUNS or t0s.size == 0 or not (t[1:] >= t[:-1]).all() \
+            or not (t0s[1:] >= t0s[:-1]).all():
+        return None
+    # instant i lies in the segment of the last start <= t[i]; instants before the
+    # first start lie in the first segment
+    bounds = np.searchsorted(t, t0s, side="left")
+    bounds[0] = 0
+    counts = np.diff(np.append(bounds, n))
+    nz = np.flatnonzero(counts)
+    j0, j1 = int(nz[0]), int(nz[-1]) + 1
+    return j0, j1, counts[j0:j1]
+
+
+def _flow_runs(osc, t, trig, t0, C1, C2, F0, counts):
+    """``osc.state_array(t, t0, C1, C2, F0, trig)`` with per-segment constants.
+
+    The segment values (``t0``, ``C1``, ``C2``, ``F0``, one per segment) hold for
+    ``counts`` consecutive instants each. Same operations in the same order as
+    :meth:`~.flows.Oscillator.state_array` and ``particular_array`` (the states are
+    identical to the bit: a test compares them), with the expressions of segment
+    constants computed once per segment and fewer temporaries.
+
+    Returns
+    -------
+    x, xd, xdd, tau : ndarray
+        The state and the time since the segment's start.
+    """
+    def rep(v):
+        return np.repeat(v, counts)
+
+    sg, wd = osc.sigma, osc.wd
+    # particular part: F0 / k + sum_j (pa s + pb c), w (pa c - pb s), -w^2 (pa s + pb c)
+    x = rep(F0 / osc.k + 0.0)
+    v = np.zeros_like(t)
+    a = np.zeros_like(t)
+    tmp = np.empty_like(t)
+    tmp2 = np.empty_like(t)
+    for (w, pa, pb), (sn, cs) in zip(osc._terms, trig, strict=True):
+        np.multiply(sn, pa, out=tmp)
+        np.multiply(cs, pb, out=tmp2)
+        tmp += tmp2
+        x += tmp
+        tmp *= w * w
+        a -= tmp
+        np.multiply(cs, pa, out=tmp)
+        np.multiply(sn, pb, out=tmp2)
+        tmp -= tmp2
+        tmp *= w
+        v += tmp
+    # homogeneous part: e (C1 cs + C2 sn), e ((C2 wd - sg C1) cs - (C1 wd + sg C2) sn)
+    tau = np.subtract(t, rep(t0))
+    e = np.exp(np.multiply(tau, -sg))
+    arg = np.multiply(tau, wd)
+    cs, sn = np.cos(arg), np.sin(arg)
+    xh = rep(C1)
+    xh *= cs
+    np.multiply(sn, rep(C2), out=tmp)
+    xh += tmp
+    xh *= e
+    vh = rep(C2 * wd - sg * C1)
+    vh *= cs
+    np.multiply(sn, rep(C1 * wd + sg * C2), out=tmp)
+    vh -= tmp
+    vh *= e
+    ah = np.multiply(vh, -2.0 * sg)
+    np.multiply(xh, osc.k / osc.m, out=tmp)
+    ah -= tmp
+    x += xh
+    v += vh
+    a += ah
+    return x, v, a, tau
+
+
 #: Grids of at least this many instants are cached by :meth:`SimulationResult.evaluate`.
 _MIN_CACHED = 256
 #: How many evaluated grids a result keeps.
@@ -232,9 +319,18 @@ class SimulationResult:
     def _evaluate(self, t: np.ndarray) -> dict[str, np.ndarray]:
         """:meth:`evaluate` without the cache (``t`` a 1-D float array)."""
         seg = self._segments
-        idx = np.clip(np.searchsorted(seg["t0"], t, side="right") - 1, 0, seg["t0"].size - 1)
-        out = {k: np.empty_like(t) for k in ("x", "xd", "xdd", "y", "yd")}
         model = self._model
+        runs = _segment_runs(seg["t0"], t)
+        if runs is not None:
+            j0, j1, counts = runs
+            modes = seg["mode"][j0:j1]
+            if (modes == modes[0]).all():   # one mode throughout: the fused path
+                return self._evaluate_runs(t, j0, j1, counts, int(modes[0]))
+            idx = np.repeat(np.arange(j0, j1), counts)
+        else:
+            idx = np.clip(np.searchsorted(seg["t0"], t, side="right") - 1, 0,
+                          seg["t0"].size - 1)
+        out = {k: np.empty_like(t) for k in ("x", "xd", "xdd", "y", "yd")}
         trig = model.base.trig(t)          # the LO's and the base's harmonics, once
         modes = seg["mode"][idx]
         for mode, osc in ((0, model.free), (1, model.stuck)):
@@ -259,6 +355,41 @@ class SimulationResult:
         out["z"] = out["y"] - out["x"]
         out["xe"] = model.base.displacement(t, trig)
         return out
+
+    def _evaluate_runs(self, t: np.ndarray, j0: int, j1: int, counts: np.ndarray,
+                       mode: int) -> dict[str, np.ndarray]:
+        """:meth:`_evaluate` of a sorted grid spent in one mode, segment by segment.
+
+        ``t`` holds ``counts[k]`` instants of segment ``j0 + k`` after each other
+        (:func:`_segment_runs`). The arithmetic is that of the general path, operation
+        for operation (so the states are the same to the bit): only the gathers of the
+        segment constants become repeats, the expressions of segment constants alone
+        are computed once per segment, and the temporaries are reused.
+        """
+        seg, model = self._segments, self._model
+        sl = slice(j0, j1)
+        osc = model.free if mode == 0 else model.stuck
+        trig = model.base.trig(t)
+        x, v, a, tau = _flow_runs(osc, t, trig, seg["t0"][sl], seg["C1"][sl], seg["C2"][sl],
+                                  seg["F0"][sl], counts)
+        if mode == 0:
+            # y0 + w0 tau + (0.5 ab) tau^2, and w0 + ab tau
+            ab = seg["ab"][sl]
+            w0 = np.repeat(seg["w0"][sl], counts)
+            y = np.repeat(seg["y0"][sl], counts)
+            y += np.multiply(w0, tau)
+            tau2 = np.multiply(tau, tau)
+            tau2 *= np.repeat(0.5 * ab, counts)
+            y += tau2
+            yd = np.repeat(ab, counts)
+            yd *= tau
+            yd += w0
+        else:
+            y = np.repeat(seg["y0"][sl], counts)
+            y += x
+            yd = v.copy()
+        return {"x": x, "xd": v, "xdd": a, "y": y, "yd": yd, "z": np.subtract(y, x),
+                "xe": model.base.displacement(t, trig)}
 
     def record_impacts(self) -> ImpactTable:
         """Impacts inside the record window [settle, settle + duration]."""
