@@ -18,7 +18,11 @@ flight law so that detection and restitution are scored on their own):
   errors (they are left out of the detected count);
 * *precision / recall*: same wall, within 0.5 ms of the true contact entry;
 * *timing*: median |t_est - t_in| of matched impacts (target <= 50 us);
-* *r*: per wall with >= 10 clean impacts, |RMS(r_est) - RMS(r_true)| (target 0.03).
+* *r*: per wall with >= 10 clean impacts, |RMS(r_est) - RMS(r_true)| (target 0.03),
+  RMS(r_true) over every true impact of the wall; beside it (no target) the same
+  error against the true r of the impacts the estimate used, which separates the
+  estimator's error from which impacts are observable (a chattering wall's last
+  re-impacts, a stick, a clipped pulse).
 
 The discovery targets on the same corpus have their own scripts:
 ``bench_realism_flight.py`` (flight law pooled over three clearances; never an
@@ -94,12 +98,24 @@ def score_case(case) -> dict:
     precision = len(ie) / det.n if det.n else float("nan")
     recall = tp / n_ok if n_ok else float("nan")
     timing = float(np.median(np.abs(det.t[ie] - imp.t_in[it]))) if len(ie) else float("nan")
-    walls = {}
+    walls, same = {}, {}
+    table = out.impact_table
+    used = table["r_used"].to_numpy(dtype=bool)
+    r_est = table["r"].to_numpy(dtype=float)
+    true_of = dict(zip(ie.tolist(), it.tolist()))
     for side in ("right", "left"):
         est = getattr(out.restitution, side)
         r_true = np.asarray(imp.r)[side_true == (1 if side == "right" else -1)]
         if est.n >= 10 and r_true.size:
             walls[side] = abs(est.rms - float(np.sqrt(np.mean(r_true ** 2))))
+            # the same error on the impacts the estimate used (matched to true ones):
+            # what the estimator gets wrong, without which impacts it could observe
+            k = [i for i in np.flatnonzero(used & (table["side"].to_numpy() == side))
+                 if i in true_of]
+            if len(k) >= 10:
+                rt = np.asarray(imp.r, dtype=float)[[true_of[i] for i in k]]
+                same[side] = abs(float(np.sqrt(np.mean(r_est[k] ** 2)))
+                                 - float(np.sqrt(np.mean(rt ** 2))))
     regime = truth.label
     kinds = {spec.split("=", 1)[1].split(":")[0] for spec in case.contact}
     return {"name": case.name, "contact": "+".join(sorted(kinds)),
@@ -111,7 +127,8 @@ def score_case(case) -> dict:
                                  and abs(det.n - n_extra_old - n_ok_old) <= 0.03 * n_ok_old),
             "recall_old": recall_old,
             "precision": precision, "recall": recall, "timing_us": timing * 1e6,
-            "r_err": walls, "periodic": bool((truth.regime or {}).get("periodic")),
+            "r_err": walls, "r_err_same": same,
+            "periodic": bool((truth.regime or {}).get("periodic")),
             "seconds_sim": t_sim, "seconds_analyze": t_an,
             "pulse": out.detection.response.to_dict() if out.detection.response else None}
 
@@ -134,6 +151,9 @@ def _summary(rows: list[dict]) -> dict:
         "r_wall_share": float(np.mean([e <= TARGETS["r_tol"] for e in walls])) if walls
         else float("nan"),
         "n_walls": len(walls),
+        "r_same_share": float(np.mean([e <= TARGETS["r_tol"] for e in same])) if (
+            same := [e for r in rows for e in r.get("r_err_same", {}).values()])
+        else float("nan"),
         "count_share_old": float(np.mean([r["count_ok_old"] for r in periodic])) if periodic
         else float("nan"),
         "recall_old": float(np.mean(old)) if (old := [r["recall_old"] for r in rows
@@ -193,6 +213,9 @@ def main() -> None:
     for what, val, op, tgt in checks:
         met = val >= tgt if op == ">=" else val <= tgt
         print(f"  {what:<36} {val:8.3f}  target {op} {tgt:<6}  {'MET' if met else 'MISSED'}")
+    print(f"  (r against the true r of the same impacts the estimate used, not every "
+          f"impact of the wall: {total['r_same_share']:.3f} of the walls within "
+          f"{TARGETS['r_tol']}; the rest of the misses above is which impacts are observable)")
     print(f"  failed cases: {len(rows) - len(good)}")
     print(f"  (criterion before resting contacts were told apart: count "
           f"{total['count_share_old']:.3f}, recall {total['recall_old']:.3f})")
