@@ -15,6 +15,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..analysis.restitution import R_MAX
 from ..errors import InputError
 from ..restitution_laws import RestitutionLaw
 from .impact_terms import (
@@ -171,7 +172,19 @@ class ImpactLawResult:
         Weighted RMS scatter of the r estimates about the best law.
     note : str or None
         Why a speed dependence that AICc prefers was not reported (its effect
-        was below ``effect_threshold``), else None.
+        was below ``effect_threshold``, or its r leaves the admissible range over
+        :attr:`valid_range`), else None.
+    n_inconsistent : int
+        Impacts excluded because their incoming speed contradicts their outgoing
+        one (the outgoing speed of a populous cluster of impacts after a much
+        faster or slower impact: the incoming flight probably spans a missed
+        impact); :attr:`warning` says which.
+    valid_range : tuple of float
+        Speeds (m/s) the law claims: from rest to 1.4 times the fastest impact
+        used (the band's upper end). Its r stays admissible there
+        (``0 < r <= R_MAX``, :data:`vidiscover.analysis.restitution.R_MAX`): the
+        selection takes no law that does not. How far the law is *identified* is
+        :attr:`speed_range`; outside it, read :meth:`band`.
     """
 
     formula: str
@@ -200,6 +213,8 @@ class ImpactLawResult:
     effect_threshold: float = math.nan
     precision: float = math.nan
     note: str | None = None
+    n_inconsistent: int = 0
+    valid_range: tuple[float, float] = (math.nan, math.nan)
 
     def __post_init__(self) -> None:
         if self.kind not in RESULT_KINDS:
@@ -223,10 +238,15 @@ class ImpactLawResult:
         return any(t != CONSTANT_TERM for t in self.terms)
 
     def predict(self, v) -> np.ndarray:
-        """Point estimate of r at speeds ``v`` (m/s); not clipped to [0, 1]."""
+        """Point estimate of r at speeds ``v`` (m/s).
+
+        Not clipped: NaN where the law's r is impossible (``r <= 0`` or ``r >
+        R_MAX``; the selection keeps that from happening over :attr:`valid_range`).
+        """
         if not self.terms:
             return np.full(np.shape(v), np.nan)
-        return _evaluate(self.terms, np.array([self.coefficients[t] for t in self.terms]), v)
+        r = _evaluate(self.terms, np.array([self.coefficients[t] for t in self.terms]), v)
+        return np.where((r > 0.0) & (r <= R_MAX), r, np.nan)
 
     def band_table(self, n_points: int = BAND_POINTS) -> dict:
         """The band on a grid from 0.6 x the slowest to 1.4 x the fastest observed speed.
@@ -309,7 +329,9 @@ class ImpactLawResult:
             "alternative": self.alternative,
             "speed_range": [_num(self.speed_range[0]), _num(self.speed_range[1])],
             "n": int(self.n), "n_dropped": int(self.n_dropped),
-            "n_outliers": int(self.n_outliers), "sigma": _num(self.sigma),
+            "n_outliers": int(self.n_outliers), "n_inconsistent": int(self.n_inconsistent),
+            "valid_range": [_num(self.valid_range[0]), _num(self.valid_range[1])],
+            "sigma": _num(self.sigma),
             "support_frequency": _num(self.support_frequency),
             "selection_frequency": {k: _num(f) for k, f in self.selection_frequency.items()},
             "criterion": self.criterion, "level": float(self.level),
