@@ -508,12 +508,36 @@ def _fir_decimate(h: np.ndarray, w: np.ndarray, big: int, n: int) -> np.ndarray:
     phases = np.empty(w.shape[:-1] + (rows - 1, big))
     phases[..., 0] = grid[..., 1:, 0]
     phases[..., 1:] = grid[..., :-1, big - 1:0:-1]
+    size = fft.next_fast_len(rows + q, real=True)
+    spec = (fft.rfft(phases, size, axis=-2) * _taps_spectrum(h, big, size)).sum(axis=-1)
+    return fft.irfft(spec, size, axis=-1)[..., q:q + n]
+
+
+#: Spectra of polyphase taps, newest first (:func:`_taps_spectrum`).
+_TAPS_SPECTRA: list = []
+
+
+def _taps_spectrum(h: np.ndarray, big: int, size: int) -> np.ndarray:
+    """``rfft`` of the ``big`` phases of ``h`` at length ``size`` (read-only).
+
+    The same for every record of one chain and length: the last few are kept (a
+    quarter of :func:`_fir_decimate`'s transforms), and a kept one is the array the
+    transform gave, so the records are the same to the bit.
+    """
+    from scipy import fft
+
+    key = (h.tobytes(), big, size)
+    for k, spec in _TAPS_SPECTRA:
+        if k == key:
+            return spec
+    q = (h.size - 1) // big
     taps = np.zeros((q + 1) * big)
     taps[:h.size] = h
-    taps = taps.reshape(q + 1, big)
-    size = fft.next_fast_len(rows + q, real=True)
-    spec = (fft.rfft(phases, size, axis=-2) * fft.rfft(taps, size, axis=0)).sum(axis=-1)
-    return fft.irfft(spec, size, axis=-1)[..., q:q + n]
+    spec = fft.rfft(taps.reshape(q + 1, big), size, axis=0)
+    spec.flags.writeable = False
+    _TAPS_SPECTRA.insert(0, (key, spec))
+    del _TAPS_SPECTRA[4:]
+    return spec
 
 
 def _odd_pad(u: np.ndarray, before: int, after: int) -> np.ndarray:
@@ -524,6 +548,19 @@ def _odd_pad(u: np.ndarray, before: int, after: int) -> np.ndarray:
     if after > 0:
         parts.append(2 * u[..., -1:] - u[..., -2:-after - 2:-1])
     return np.concatenate(parts, axis=-1) if len(parts) > 1 else u
+
+
+@functools.lru_cache(maxsize=1)
+def _blas_controller():
+    """The native thread pools as threadpoolctl sees them, looked up once.
+
+    ``threadpool_limits`` looks the libraries up afresh on every call (~0.4 ms, a
+    scan of the process's memory map); numpy's BLAS, the one limited here, is loaded
+    with numpy, before the first call.
+    """
+    from threadpoolctl import ThreadpoolController
+
+    return ThreadpoolController()
 
 
 #: Mismatch at an interval's midpoint beyond which it is evaluated at every oversampled
@@ -563,8 +600,6 @@ def _os_signals(result, st, fs: float, n: int, big: int, n_pre: int):
     x, v_edges, xe : ndarray
         LO displacement, LO velocity at the edges, base displacement.
     """
-    from threadpoolctl import threadpool_limits
-
     dt = 1.0 / (fs * big)
     h = 1.0 / fs
     settle = result.settle
@@ -592,7 +627,7 @@ def _os_signals(result, st, fs: float, n: int, big: int, n_pre: int):
     knots_mid = np.stack([kxe[:-1], mid["xe"], kxe[1:]], axis=1)
     # one BLAS thread: these products have an inner dimension of 3-6, and a
     # multi-threaded BLAS is 10-30x slower on them on a busy machine
-    with threadpool_limits(limits=1, user_api="blas"):
+    with _blas_controller().limit(limits=1, user_api="blas"):
         x[:-1] = (coef @ bx.T).ravel()
         v[1:-1] = (coef @ bv.T).ravel()
         xe[:-1] = (knots_mid @ lag).ravel()
