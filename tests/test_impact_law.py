@@ -698,3 +698,24 @@ def test_a_law_reaching_zero_beyond_the_impacts_holds_up_to_that_speed():
     assert law.kind == "linear" and "holds from rest to" in law.note
     assert 0.95 < law.valid_range[1] < 1.0 and law.valid_range[0] == 0.0
     assert np.isnan(law.predict(1.05)) and law.predict(0.9) > 0
+
+
+@pytest.mark.parametrize(("case", "side", "tol"), [("dev-073", "right", 0.02),
+                                                   ("test-093", "left", 0.006)])
+def test_the_form_is_chosen_in_the_speed_clusters_means(case, side, tol):
+    """Hunt-Crossley walls pooled over two clearances whose best per-impact AICc is a
+    two-coefficient curve (``0.5353 + 0.5644 exp(-v)``, ``0.9371 - 0.2636 v``; RMS
+    0.033 and 0.034 at the third clearance) while the one-coefficient contact laws
+    reported now are 12 and 283 AICc behind (beyond the window of 4), on standard
+    errors that repeat at every impact of a speed cluster. In the clusters' means a
+    law with r = 1 at rest is adequate and, sparser, is reported: RMS 0.016 and 0.004
+    (measured)."""
+    law = _realism_law(case, side)
+    assert law.velocity_dependent and law.fixed_intercept and len(law.terms) == 1 + (
+        law.kind != "hunt-crossley"), law.formula
+    assert law.candidates.set_index("name").loc[law.alternative, "delta_aicc"] > 10
+    _, truth = _realism_tables(case.split("-")[0])
+    t = truth[(truth["case"] == case) & (truth["side"] == side)]
+    t = t[t["v"] <= 1.4 * law.speed_range[1]]
+    assert len(t) >= 10
+    assert np.sqrt(np.mean((law.predict(t["v"].to_numpy()) - t["r"]) ** 2)) < tol
