@@ -627,10 +627,11 @@ def _os_signals(result, st, fs: float, n: int, big: int, n_pre: int):
     knots_mid = np.stack([kxe[:-1], mid["xe"], kxe[1:]], axis=1)
     # one BLAS thread: these products have an inner dimension of 3-6, and a
     # multi-threaded BLAS is 10-30x slower on them on a busy machine
+    # the products are written in place (x[:-1] holds one row of `big` per interval)
     with _blas_controller().limit(limits=1, user_api="blas"):
-        x[:-1] = (coef @ bx.T).ravel()
-        v[1:-1] = (coef @ bv.T).ravel()
-        xe[:-1] = (knots_mid @ lag).ravel()
+        np.matmul(coef, bx.T, out=x[:-1].reshape(-1, big))
+        np.matmul(coef, bv.T, out=v[1:-1].reshape(-1, big))
+        np.matmul(knots_mid, lag, out=xe[:-1].reshape(-1, big))
     x[-1] = kx[-1]
     xe[-1] = kxe[-1]
     ends = result.evaluate(np.array([knots[0] - 0.5 * dt, knots[-1] + 0.5 * dt]))["xd"]
@@ -642,7 +643,10 @@ def _os_signals(result, st, fs: float, n: int, big: int, n_pre: int):
         sel = (idx[:, None] * big + m).ravel()
         x[sel], xe[sel] = exact["x"][:sel.size], exact["xe"][:sel.size]
         v[sel + 1] = exact["xd"][sel.size:]
-    edges = knots[0] + (np.arange(v.size) - 0.5) * dt
+    edges = np.arange(v.size, dtype=float)     # knots[0] + (i - 0.5) dt, in place
+    edges -= 0.5
+    edges *= dt
+    edges += knots[0]
     return edges, x, v, xe
 #: Warm-up of the causal filters in e-folds of their slowest pole, and its cap (s).
 _WARM_EFOLDS, _WARM_MAX = 10.0, 0.5
