@@ -45,3 +45,19 @@ def test_numba_loads_with_the_first_simulation_not_with_the_package():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout
     assert "BEFORE False" in out and "AFTER True" in out
+
+
+def test_the_compliant_engine_loads_with_its_first_use():
+    """scipy.integrate/optimize (~0.4 s) come with the compliant engine, not with simulate:
+    a sweep worker running the exact engine and recording does without them."""
+    code = ("import sys; from vidiscover import preset, record, simulate;"
+            "import vidiscover.simulation as s;"
+            "record(simulate(preset('paper', b=0.009), settle=0.0, duration=0.2), seed=0);"
+            "print('EXACT', sorted({'scipy.integrate', 'scipy.optimize'} & set(sys.modules)));"
+            "print('NAMES', s.simulate_reference.__module__, s.CompliantResult.__name__);"
+            "print('AFTER', 'scipy.integrate' in sys.modules)")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True).stdout
+    assert "EXACT []" in out
+    assert "NAMES vidiscover.simulation.compliant CompliantResult" in out
+    assert "AFTER True" in out
