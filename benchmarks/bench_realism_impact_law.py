@@ -17,7 +17,10 @@ law so that the impact law is scored on its own:
   ``|v_in|`` and true ``r``), at the speeds up to 40 % beyond the fastest one
   observed in the pool. How far beyond the pool each prediction reached is printed
   (the dynamics decide: a larger clearance does not always hit faster).
-  Score per wall: the RMS of ``r_pred - r_true`` over those impacts, within 0.03.
+  Score per wall: the RMS of ``r_pred - r_true`` over those impacts, within 0.03
+  (the slower impacts of the third clearance are asked too: a law must hold toward
+  rest). Where the law's r would be impossible, ``predict`` gives NaN (outside its
+  ``valid_range``): a miss.
   The issue sets no share for this one; it is read as "every wall", and the share
   and the worst wall are printed.
 

@@ -132,7 +132,8 @@ class ImpactLawResult:
         The intercept is fixed at 1 (``1 - r`` was regressed), not estimated.
     candidates : pandas.DataFrame
         One row per candidate: ``name, n_params, rss, aicc, delta_aicc, cv_rmse,
-        source, selected, bootstrap_frequency``.
+        effect, admissible, source, selected, bootstrap_frequency`` (``admissible``:
+        its r stays in ``(0, R_MAX]`` from rest through the fastest impact).
     delta_aicc_vs_constant : float
         ``AICc(constant) - AICc(alternative)``; > 0 favours a velocity dependence.
     p_value_vs_constant : float
@@ -155,9 +156,11 @@ class ImpactLawResult:
     level : float
         Confidence level of ``ci`` and :meth:`band`.
     warning : str or None
-        Why the fit fell back to a constant (or found nothing), and that r exceeds
-        1 over the observed speeds (a passive wall cannot), saying whether by more
-        than twice the standard error of an r estimate (biased estimates), else None.
+        Which impacts were excluded as inconsistent (:attr:`n_inconsistent`), why
+        the fit fell back to a constant (or found nothing), that the estimates rise
+        with speed beyond the threshold, and that r exceeds 1 over the observed
+        speeds (a passive wall cannot), saying whether by more than twice the
+        standard error of an r estimate (biased estimates); else None.
     boot_coefficients : ndarray, shape (n_boot, len(terms))
         Refitted coefficients per resample.
     effect : float
