@@ -322,6 +322,13 @@ class _Design:
         cols = np.stack([IMPACT_TERMS[t](v) for t in cand.r_terms], axis=-1)
         return cols @ coef
 
+    def fitted(self, cand: _Candidate, coef: np.ndarray, rows=None) -> np.ndarray:
+        """:meth:`predict` at the impacts (``rows`` of them), from the tabulated library."""
+        if cand.hunt_crossley:
+            return self._hc(coef[0] * (self.v if rows is None else self.v[rows]))
+        theta = self.theta if rows is None else self.theta[rows]
+        return theta[:, self._cols(cand.r_terms)] @ coef
+
     def fit(self, cand: _Candidate, r: np.ndarray, rows=None) -> tuple[np.ndarray, float]:
         """Coefficients of ``cand.r_terms`` in the r-equation and the weighted RSS."""
         r = r if rows is None else r[rows]
@@ -998,7 +1005,7 @@ def discover_impact_law(v, r, *, seed: int = 0, n_boot: int = 200, groups=None,
             vv = v if rows is None else v[rows]
             cl_ok = _cluster_adequate(vv, r if rows is None else r[rows],
                                       sig if rows is None else sig[rows], cands,
-                                      [design.predict(c, f[0], vv) for c, f in
+                                      [design.fitted(c, f[0], rows) for c, f in
                                        zip(cands, fits, strict=True)], aicc)
         return rss, aicc, cvs, curves, threshold, precision, e_ends, fits, (adm, cl_ok)
 
@@ -1310,12 +1317,16 @@ def _cluster_adequate(v: np.ndarray, r: np.ndarray, sig: np.ndarray,
     if k < 2:
         return out
     best = int(np.argmin(aicc))
-    resid = [r - p for p in preds]
-    means, sc = _cluster_stats(lab, k, resid, sig)
+    _, sc = _cluster_stats(lab, k, (), sig)
+    grp = np.argsort(lab, kind="stable")
+    cnt = np.bincount(lab, minlength=k)
+    starts = np.concatenate(([0], np.cumsum(cnt)[:-1]))
+    resid = r[grp, None] - np.stack(preds, axis=1)[grp]          # impacts x candidates
+    means = np.add.reduceat(resid, starts, axis=0) / cnt[:, None]  # clusters x candidates
     w = 1.0 / sc ** 2
-    w = 1.0 / (sc ** 2 + _excess_scatter(w, means[best], cands[best].n_params))
-    aic = np.array([float(np.sum(w * e ** 2)) + 2.0 * c.n_params if np.isfinite(a) else np.inf
-                    for e, c, a in zip(means, cands, aicc, strict=True)])
+    w = 1.0 / (sc ** 2 + _excess_scatter(w, means[:, best], cands[best].n_params))
+    n_par = np.array([c.n_params for c in cands], dtype=float)
+    aic = np.where(np.isfinite(aicc), w @ means ** 2 + 2.0 * n_par, np.inf)
     return np.isfinite(aic) & (aic <= np.min(aic) + CLUSTER_WINDOW)
 
 
