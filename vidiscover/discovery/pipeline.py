@@ -53,7 +53,7 @@ from ..analysis import AnalysisResult, DetectionOptions, analyze
 from ..errors import InputError
 from ..recording import Recording
 from .flight_law import MAX_TILT_DEG
-from .impact_law import MIN_EFFECT, discover_impact_law
+from .impact_law import CLAIMED_BEYOND, MIN_EFFECT, discover_impact_law
 from .impact_result import ImpactLawResult
 
 __all__ = ["DiscoveryResult", "discover", "SIDES", "IMPACT_DATA_COLUMNS"]
@@ -120,6 +120,12 @@ class DiscoveryResult:
             rng = law.speed_range
             where = (f"v = |z'-| in {rng[0]:.3g}-{rng[1]:.3g} m/s, n = {law.n}"
                      if law.n else "no impacts")
+            top = law.valid_range[1]
+            if law.n and math.isfinite(top) and top < CLAIMED_BEYOND * rng[1] * (1 - 1e-9):
+                where += f"; holds up to {top:.3g} m/s (r reaches 0 there)"
+            if law.n_inconsistent:
+                where += (f"; {law.n_inconsistent} impact(s) left out as inconsistent "
+                          "(a missed impact before them)")
             lines.append(f"{side} wall: {law.formula}   ({where})")
         return lines
 
