@@ -171,6 +171,62 @@ def test_draws_are_seeded_and_in_range():
             assert lo <= getattr(case, k) <= hi
 
 
+def test_corpus_draws_are_pure_functions_of_seed_and_index_and_no_corpus_case():
+    from vidiscover.corpus import realism_case
+    from vidiscover.regimes.dataset import draw_corpus_cases
+
+    a = draw_corpus_cases(3, 5)
+    assert a == draw_corpus_cases(3, 5) and a[:2] == draw_corpus_cases(2, 5)
+    assert [c.name for c in a] == ["draw5-000", "draw5-001", "draw5-002"]
+    assert a[0] != draw_corpus_cases(1, 6)[0]
+    assert a[0].m1 != realism_case("dev", 0).m1 and a[0].contact and a[0].sensors
+
+
+def test_train_beyond_the_dev_split_draws_the_rest_from_its_seed(monkeypatch):
+    """`--n-corpus-train N` above the dev split's 96: all of dev, then N - 96 drawn
+    recordings (origin corpus_draw, grouped with dev for the rules' labels)."""
+    import vidiscover.regimes.classifier as clf_mod
+    import vidiscover.regimes.dataset as ds
+
+    asked = {}
+
+    def rows(origin, k):
+        return pd.DataFrame({"label": ["multi_ipc"] * k, "status": "ok",
+                             "param:origin": origin})
+
+    monkeypatch.setattr(ds, "generate", lambda n, seed, **kw: rows("random", n))
+    monkeypatch.setattr(ds, "corpus_set",
+                        lambda split, n, **kw: asked.update(split=(split, n)) or rows("", n))
+    monkeypatch.setattr(ds, "corpus_draw_set",
+                        lambda n, seed, **kw: asked.update(draw=(n, seed)) or rows("", n))
+
+    def fit(data, tests, **kw):
+        asked["origins"] = data["param:origin"].value_counts().to_dict()
+        asked["groups"] = set(clf_mod._groups(data))
+        return None, {}
+
+    monkeypatch.setattr(clf_mod, "_fit_and_report", fit)
+    clf_mod.train(3, 7, n_test=0, n_corpus_train=100)
+    assert asked["split"] == ("dev", 96) and asked["draw"] == (4, 7)
+    assert asked["origins"] == {"random": 3, "corpus_dev": 96, "corpus_draw": 4}
+    assert asked["groups"] == {"paper_rig", "corpus_dev"}
+    asked.clear()
+    clf_mod.train(3, 7, n_test=0, n_corpus_train=96)
+    assert asked["split"] == ("dev", 96) and "draw" not in asked
+
+
+def test_a_drawn_corpus_row_kept_by_a_model_is_recomputed():
+    from vidiscover.regimes.dataset import corpus_draw_set, probe_rows, reproduce_row
+
+    with threadpool_limits(1):
+        data = corpus_draw_set(1, 0).assign(**{"param:origin": "corpus_draw"})
+        (probe,) = probe_rows(data)
+        row = reproduce_row(probe)
+    assert probe["name"] == "draw0-000" and row["label"] == probe["label"]
+    assert {k: row[f"feature:{k}"] for k in probe["features"]} == pytest.approx(
+        probe["features"], rel=1e-12, abs=0, nan_ok=True)
+
+
 @pytest.fixture(scope="module")
 def small_model(small_sets):
     with threadpool_limits(1):

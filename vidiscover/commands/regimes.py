@@ -96,8 +96,9 @@ def classify(recordings, meta, model_path, channels, as_json):
               help="Random training cases of other rigs, compliant walls and instrument "
                    "chains, drawn as the realism corpus draws them.")
 @click.option("--n-corpus-train", type=int, default=0, show_default=True,
-              help="Realism-corpus dev cases analysed as a user's recordings (pulse "
-                   "learned; a few seconds each) added to the training set (0: none).")
+              help="Recordings analysed as a user's (pulse learned; a few seconds "
+                   "each) added to the training set: the realism corpus's 96 dev cases, "
+                   "then cases drawn as the corpus draws them from --seed (0: none).")
 @click.option("--n-corpus-test", type=int, default=0, show_default=True,
               help="Realism-corpus test cases analysed as a user's recordings (pulse "
                    "learned; a few seconds each) to score on (0: none).")

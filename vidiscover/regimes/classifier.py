@@ -549,7 +549,8 @@ def _groups(data: pd.DataFrame) -> np.ndarray:
     k1 = (data["param:k1"].to_numpy(float) if "param:k1" in data
           else np.zeros(len(data)))
     other = np.nan_to_num(k1) > 0
-    return np.where(origin == "corpus_dev", "corpus_dev",
+    corpus = np.isin(origin, ("corpus_dev", "corpus_draw"))
+    return np.where(corpus, "corpus_dev",
                     np.where(other, "other_rigs", "paper_rig")).astype(object)
 
 
@@ -629,10 +630,12 @@ def train(n: int = DEFAULT_N_TRAIN, seed: int = DEFAULT_SEED, *, n_test: int = D
         Random training cases of other rigs, compliant or exact walls and drawn
         instrument chains (:func:`vidiscover.regimes.dataset.draw_realism_cases`).
     n_corpus_train : int
-        Cases of the realism corpus's ``dev`` split analysed as a user's recordings
-        are (the pulse learned from each), added to the training set: they teach
-        the classifier, and the choice of the rules' labels, what a learned pulse
-        does to the features.
+        Recordings analysed as a user's recordings are (the pulse learned from
+        each), added to the training set: they teach the classifier, and the choice
+        of the rules' labels, what a learned pulse does to the features. The realism
+        corpus's ``dev`` split first (96 cases), then, beyond it, cases drawn as the
+        corpus draws them from ``seed``
+        (:func:`vidiscover.regimes.dataset.draw_corpus_cases`).
     n_corpus_test : int
         Cases of the realism corpus's ``test`` split (:mod:`vidiscover.corpus`)
         analysed as a user's recordings are (the pulse learned from each); 0: none.
@@ -647,13 +650,19 @@ def train(n: int = DEFAULT_N_TRAIN, seed: int = DEFAULT_SEED, *, n_test: int = D
         ``sets``, the out-of-fold comparison that chose the rules' labels under
         ``gate``, plus ``n_train``, ``train_labels``.
     """
-    from .dataset import corpus_set, generate
+    from ..corpus import N_CASES
+    from .dataset import corpus_draw_set, corpus_set, generate
 
     kw = dict(n_jobs=n_jobs, scheduler=scheduler, progress=progress)
     data = generate(n, seed, n_realism=n_realism, **kw)
     if n_corpus_train:
-        dev = corpus_set("dev", n_corpus_train, **kw).assign(**{"param:origin": "corpus_dev"})
+        n_dev = min(n_corpus_train, N_CASES["dev"])
+        dev = corpus_set("dev", n_dev, **kw).assign(**{"param:origin": "corpus_dev"})
         data = pd.concat([data, dev], ignore_index=True)
+        if n_corpus_train > n_dev:
+            more = corpus_draw_set(n_corpus_train - n_dev, seed, **kw)
+            data = pd.concat([data, more.assign(**{"param:origin": "corpus_draw"})],
+                             ignore_index=True)
     tests = {}
     if n_test:
         tests["exact_paper_rig"] = generate(n_test, seed + TEST_SEED_OFFSET, **kw)

@@ -37,7 +37,8 @@ from ..errors import InputError
 from .labels import LABELS
 
 __all__ = ["PARAM_RANGES", "Case", "draw_cases", "draw_realism_cases", "simulate_case",
-           "generate", "feature_context", "probe_rows", "reproduce_row", "M1"]
+           "generate", "feature_context", "probe_rows", "reproduce_row", "M1",
+           "draw_corpus_cases", "corpus_draw_set"]
 
 #: LO mass of every drawn rig (kg, the paper's); the ball mass follows the mass ratio.
 M1 = 4.168
@@ -416,7 +417,8 @@ def generate(n: int, seed: int, *, n_realism: int = 0, min_per_label: int | None
 
 #: Training rows a model keeps in its metadata (:func:`probe_rows`), per origin: the
 #: first rows of the paper rig's random draw, of the other rigs and of the corpus.
-PROBE_PER_ORIGIN: Mapping[str, int] = {"random": 8, "realism": 4, "corpus_dev": 2}
+PROBE_PER_ORIGIN: Mapping[str, int] = {"random": 8, "realism": 4, "corpus_dev": 2,
+                                        "corpus_draw": 1}
 #: Labels of probe rows: periodic or impact-free motions, which rounding cannot move
 #: to another attractor (a chaotic row's features differ at the rounding level between
 #: machines whose libm rounds the last bit differently).
@@ -466,6 +468,12 @@ def reproduce_row(probe: Mapping) -> dict:
 
         split, index = probe["name"].rsplit("-", 1)
         return _corpus_row(realism_case(split, int(index)))
+    if probe["origin"] == "corpus_draw":
+        from ..corpus import draw_realism_case
+
+        split, index = probe["name"].rsplit("-", 1)     # draw{seed}-{index}
+        rng = np.random.default_rng([int(split[len("draw"):]), 3, int(index)])
+        return _corpus_row(draw_realism_case(rng, split, int(index)))
     names = {f.name for f in fields(Case)}
     params = {k: _tuples(v) for k, v in probe["params"].items() if k in names}
     params["seed"] = int(params["seed"])        # a float in a table with missing values
@@ -516,6 +524,31 @@ def _corpus_row(case) -> dict:
                 "param:anti_alias": case.sensors.get("anti_alias"),
                 "param:sample_rate": case.sensors.get("sample_rate")})
     return row
+
+
+def draw_corpus_cases(n: int, seed: int) -> list:
+    """``n`` recordings drawn as the realism corpus draws them, from ``seed``.
+
+    Case ``i`` is a pure function of ``(seed, i)`` (its draws come from
+    ``numpy.random.default_rng([seed, 3, i])``), named ``draw{seed}-{i:03d}``; none is
+    a case of the corpus's fixed splits. Training adds them to the corpus's ``dev``
+    split when it wants more recordings analysed as a user's than that split holds.
+    """
+    from ..corpus import draw_realism_case
+
+    return [draw_realism_case(np.random.default_rng([seed, 3, i]), f"draw{seed}", i)
+            for i in range(int(n))]
+
+
+def corpus_draw_set(n: int, seed: int, *, n_jobs: int | None = 1, scheduler=None,
+                    progress: bool = False) -> pd.DataFrame:
+    """:func:`draw_corpus_cases` analysed as a user would (the pulse learned)."""
+    from ..scale import parallel_map
+
+    rows = parallel_map(_corpus_row, draw_corpus_cases(n, seed), scheduler=scheduler,
+                        n_jobs=n_jobs, progress=progress, desc=f"corpus draws {seed}")
+    df = pd.DataFrame(rows)
+    return df[df["status"] == "ok"].reset_index(drop=True)
 
 
 def corpus_set(split: str = "test", n: int | None = None, *, n_jobs: int | None = 1,
