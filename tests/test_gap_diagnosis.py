@@ -14,9 +14,19 @@ import numpy as np
 import pytest
 from gap_cases import quick_battery, recording
 
+from vidiscover.analysis import analyze
 from vidiscover.errors import InputError
 from vidiscover.gap import STATS, GapReport, diagnose, measure
-from vidiscover.gap.components import GROUPS, compare, energy_distance
+from vidiscover.gap.components import (
+    GROUPS,
+    LASER_FIT_MAX,
+    LASER_STATS,
+    compare,
+    energy_distance,
+    gate_laser,
+    laser_fit_quality,
+    mirror,
+)
 from vidiscover.gap.diagnose import SIGNIFICANT_DROP
 
 
@@ -73,6 +83,98 @@ def test_flight_drag_reads_the_friction_coefficient_and_nothing_else():
     for spec in ((), ("inclination=5",), ("contact_duration=0.0015",)):
         d, e = drag(spec)
         assert abs(d) < 0.02, (spec, d, e)
+
+
+def test_laser_momentum_reads_a_clearance_error():
+    # the laser's LO velocity jumps against the flight speeds (which assume the
+    # metadata b): the statistic moves with ln((b + db) / b), read at 0.7-0.85 of it at
+    # 15 mm (-0.048 for -1 mm, +0.033 for +0.6 mm; errors 0.004-0.005)
+    def laser(spec):
+        s = measure(recording(0.015, spec)[0])
+        return s.values["momentum.laser"], s.errors["momentum.laser"]
+
+    v0, e0 = laser(())
+    assert 0 < e0 < 0.008
+    for db in (-0.001, 0.0006):
+        v, e = laser((f"clearance_error={db}",))
+        assert 0 < e < 0.008
+        assert (v - v0) / math.log1p(db / 0.015) == pytest.approx(0.8, abs=0.2), (db, v, v0)
+
+
+def test_laser_momentum_opposite_reads_a_tilt_and_flips_in_the_mirror():
+    # a steady force along the axis moves the flight speeds apart from the impact
+    # speeds, the other way at each wall: the walls' laser log ratios part by about
+    # 0.0090-0.0111 per degree at 15 mm (0.0031 without tilt; errors 0.004-0.005)
+    def opposite(spec):
+        s = measure(recording(0.015, spec)[0])
+        assert 0 < s.errors["momentum.laser_opposite"] < 0.006
+        assert mirror(s).values["momentum.laser_opposite"] == pytest.approx(
+            -s.values["momentum.laser_opposite"], abs=1e-15)
+        return s.values["momentum.laser_opposite"]
+
+    v0 = opposite(())
+    assert abs(v0) < 0.008
+    for theta in (2.0, 5.0, -5.0):
+        v = opposite((f"inclination={theta}",))
+        assert (v - v0) / theta == pytest.approx(0.0098, abs=0.002), (theta, v, v0)
+
+
+def test_a_ringing_sensor_sheet_leaves_the_laser_statistics_out():
+    # the kink fits read the ringing (fit quality 4.6 against 1.7 for a clean laser
+    # at 15 mm): the real recording's laser statistics are left out for every candidate
+    def signature(spec):
+        rec = recording(0.015, spec)[0]
+        an = analyze(rec, n_boot=0)
+        return measure(rec, an), laser_fit_quality(rec, an)
+
+    clean, q_clean = signature(())
+    ringing, q_ringing = signature(("sensor_resonance=180,0.01",))
+    assert 1.0 < q_clean < LASER_FIT_MAX
+    assert q_ringing > 2 * LASER_FIT_MAX
+    assert gate_laser(clean, q_clean) is clean
+    gated = gate_laser(ringing, q_ringing)
+    assert all(math.isnan(gated.values[k]) for k in LASER_STATS)
+    assert all(math.isfinite(ringing.values[k]) for k in LASER_STATS)
+    assert compare(gated, clean, {}).restricted(LASER_STATS) == 0.0
+
+
+def test_the_laser_statistics_are_a_second_look_where_the_others_see_no_gap():
+    import dataclasses
+
+    from vidiscover.effects import Effects
+    from vidiscover.gap.components import without
+    from vidiscover.gap.diagnose import _second_look, build_model
+    from vidiscover.gap.fit import CandidateFit
+
+    full = build_model(recording(0.015)[0])
+    real = full.real
+    assert all(math.isfinite(real.values[k]) for k in LASER_STATS)
+    plain = dataclasses.replace(full, real=without(real, LASER_STATS))
+
+    def nominal(**shift):
+        # the nominal model is scored without the laser statistics
+        vals = dict(real.values)
+        for k, d in shift.items():
+            vals[k.replace("__", ".")] += d
+        sim = dataclasses.replace(real, values=vals)
+        return CandidateFit(name="nominal", params={}, n_params=0, r=full.params.r,
+                            effects=Effects(), gap=compare(plain.real, sim, {}),
+                            signature=sim)
+
+    # no gap on the other statistics: the laser statistics are put back and seen
+    n0 = nominal(momentum__laser=0.1)
+    assert n0.gap.total == 0.0
+    m, n = _second_look(plain, n0, real)
+    assert m.real is real and n.gap.total > SIGNIFICANT_DROP
+    assert n.gap.total == pytest.approx(n.gap.restricted(LASER_STATS), rel=1e-12)
+    # a gap the other statistics see: they stay out (unless always)
+    n1 = nominal(momentum__laser=0.1, flights__speed_ratio=0.05)
+    assert n1.gap.total > SIGNIFICANT_DROP
+    m, n = _second_look(plain, n1, real)
+    assert m is plain and n is n1
+    assert all(math.isnan(m.real.values[k]) for k in LASER_STATS)
+    m, n = _second_look(plain, n1, real, always=True)
+    assert n.gap.total > n1.gap.total + 4
 
 
 def test_wall_restitution_statistics_match_the_truth():

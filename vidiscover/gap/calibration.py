@@ -92,7 +92,7 @@ def nominal_diffs(case: dict) -> dict:
     saved = dict(components.FORM_SCALE)
     components.FORM_SCALE.clear()
     try:
-        model, nominal, _ = nominal_model(rec)
+        model, nominal, _ = nominal_model(rec, second_look=False)
     finally:
         components.FORM_SCALE.update(saved)
     out = {}

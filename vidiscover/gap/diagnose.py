@@ -23,7 +23,18 @@ from threadpoolctl import threadpool_limits
 from .._workers import fork_executor, n_workers
 from ..effects import Effects
 from ..errors import InputError
-from .components import GROUPS, STATS, compare, measure, mirror, noise_scales
+from .components import (
+    GROUPS,
+    LASER_STATS,
+    STATS,
+    compare,
+    gate_laser,
+    laser_fit_quality,
+    measure,
+    mirror,
+    noise_scales,
+    without,
+)
 from .fit import (
     BALL_SPEEDS,
     CANDIDATES,
@@ -307,7 +318,7 @@ def build_model(rec, an=None, *, settle: float = 20.0) -> Model:
 
     if an is None:
         an = analyze(rec, n_boot=0)
-    real = measure(rec, an)
+    real = gate_laser(measure(rec, an), laser_fit_quality(rec, an))
     fc = an.forcing
     r = real.r_pooled if np.isfinite(real.r_pooled) else 0.6
     params = rec.meta.params(r=float(min(max(r, 0.0), 1.0))).replace(
@@ -318,7 +329,28 @@ def build_model(rec, an=None, *, settle: float = 20.0) -> Model:
                  real=real, settle=settle, instrument=_instrument(an))
 
 
-def nominal_model(rec, an=None, *, seed: int = 0, run=None
+def _second_look(model: Model, nominal: CandidateFit, real, always: bool = False
+                 ) -> tuple[Model, CandidateFit]:
+    """The recording's laser-kink statistics (``real``) back where the others see no gap.
+
+    The nominal model is chosen and scored without them (``model.real`` lacks them).
+    Where its gap on the other statistics stays below :data:`SIGNIFICANT_DROP` (no
+    effect can be significant on them), they are put back for every candidate: there
+    they are the only statistics that see a clearance error at 11-15 mm (nominal
+    gaps 1.4-2.2 without them) or a tilt behind compliant walls. Above it the fits
+    of other effects are judged without them: those fits leave residuals in them (an
+    excitation distortion, a tilt at 6 mm: 0.5-0.6) that moved intervals and pairs
+    (seed-0 battery with them throughout: pairs 5/6 -> 3/6, coverage 0.953 -> 0.893).
+    ``always``: put back whatever the gap (the model-form calibration).
+    """
+    if not always and nominal.gap.total >= SIGNIFICANT_DROP:
+        return model, nominal
+    model = dataclasses.replace(model, real=real)
+    return model, dataclasses.replace(
+        nominal, gap=compare(real, nominal.signature, model.rep_var))
+
+
+def nominal_model(rec, an=None, *, seed: int = 0, run=None, second_look: bool = True
                   ) -> tuple[Model, CandidateFit, int]:
     """Nominal model with its attractor, noise scales and validated gap.
 
@@ -329,7 +361,8 @@ def nominal_model(rec, an=None, *, seed: int = 0, run=None
     give the noise scale of every statistic (in chaotic regimes this is the
     trajectory-to-trajectory spread). ``run(worker, items)`` simulates the independent
     draws (default: one after the other, here; :func:`diagnose` shares them between
-    its processes).
+    its processes). The laser-kink statistics are a second look (:func:`_second_look`;
+    ``second_look=False``: always compared).
 
     Returns
     -------
@@ -340,6 +373,8 @@ def nominal_model(rec, an=None, *, seed: int = 0, run=None
     """
     run = run if run is not None else (lambda worker, items: [worker(i) for i in items])
     model = build_model(rec, an)
+    real = model.real
+    model = dataclasses.replace(model, real=without(real, LASER_STATS))
     fx0 = Effects()
     scan = run(signature_item, [(model, fx0, None, v, seed) for v in BALL_SPEEDS])
     gaps = [compare(model.real, s, {}, allow_mirror=True).total for s in scan]
@@ -366,6 +401,7 @@ def nominal_model(rec, an=None, *, seed: int = 0, run=None
     nominal = CandidateFit(name="nominal", params={}, n_params=0, r=model.params.r,
                            effects=fx0, gap=compare(model.real, val, model.rep_var),
                            signature=val, n_sims=len(scan) + N_REPLICATES + 1 + obj.n_sims)
+    model, nominal = _second_look(model, nominal, real, always=not second_look)
     return model, nominal, nominal.n_sims
 
 
