@@ -26,14 +26,20 @@ draws come in rounds of 12 kinds (the 8 catalogue effects, 2 no-effect cases, th
 the 2 two-effect kinds), so ``--drawn 8`` holds no two-effect case: use ``--drawn 12``
 or ``24`` to quote the pairs (the first 8 cases of any N are those of ``--drawn 8``).
 
-Last full run (seed 0, code b25c947, where measure() stopped being bit-identical, its
-statistics moving <= 6e-14): top-1 0.912 over 57, none 0.909 of 11, out-of-catalogue
-0.833, median shrink 0.996, pairs 5/6, coverage 0.953, the same as before that change
-(later gap commits leave verdicts alone by construction), 583 s CPU in the cases.
-Re-run on 554f16a (others' analysis commits since): the same six figures and confusion
-table, 540 s CPU. Fresh draws on that code, ``--drawn 24``: seed 9191 (run once, not
-looked at before): top-1 14/16 = 0.875, none 4/4, shrink 0.999, pairs 1/4, coverage
-22/25 = 0.88; earlier seeds 42: 13/16, 4242: 11/16 (first run).
+Last full run (seed 0) with the laser-kink statistics as a second look
+(``momentum.laser``, ``momentum.laser_opposite``, compared only where the nominal gap on
+the others stays below 4): top-1 0.930 over 57 (clearance 5/7), none 0.909 of 11,
+out-of-catalogue 0.833, median shrink 0.996, pairs 5/6, coverage 0.953 (82/86); only
+the 13 cases whose gap the others do not see changed, 558 s CPU in the cases. Before
+(b25c947, 554f16a): top-1 0.912, none 0.909, out-of-catalogue 0.833, shrink 0.996, pairs
+5/6, coverage 0.953 (81/85). Tuning draws, ``--drawn 24``, before -> after: seed 42
+top-1 13/16 -> 15/16, coverage 0.926 -> 0.931, pairs 2/4 both; 4242 top-1 12/16 ->
+14/16, coverage 0.808 -> 0.821, pairs 3/4 both; none 4/4 throughout. Fresh seed 27182
+(run once, on the shipped code): top-1 15/16 = 0.938, none 4/4, shrink 0.998, pairs
+0/4, coverage 20/24 = 0.833 (earlier fresh seed 9191 before the change: top-1 14/16,
+pairs 1/4, coverage 22/25). Pairs miss where the best single effect leaves 4-8 (no pair
+search below :data:`~vidiscover.gap.diagnose.SIGNIFICANT_GAP`) or the walls see no
+impact.
 
 Usage::
 
