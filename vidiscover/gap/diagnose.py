@@ -10,17 +10,14 @@ significant gap, tries a second effect on top of it (forward selection).
 
 from __future__ import annotations
 
-import collections
-import concurrent.futures
 import dataclasses
 import math
-import threading
 from dataclasses import dataclass, field
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from .._workers import fork_executor, n_workers
+from .._workers import WorkerPool, n_workers
 from ..effects import Effects
 from ..errors import InputError
 from .components import (
@@ -704,15 +701,15 @@ def _warm_up() -> None:
 class _Runner:
     """Runs a diagnosis' independent tasks: in this process and ``n - 1`` workers.
 
-    With ``n_jobs`` processes (None: all cores) and no Dask scheduler, ``n_jobs - 1``
-    worker processes are started at once and warm up (:func:`_warm_up`) while this
-    process analyses the recording and simulates the nominal model; every batch of
-    tasks is then shared between this process and the warm workers, the costliest
-    first, each process taking the next task when it is free. (A pool of ``n_jobs``
-    workers started at the candidate fits left a core idle while the parent worked
-    alone, and then paid every worker's start-up before the first fit.) The results
-    do not depend on who ran a task. With a scheduler, batches go to Dask
-    (:func:`~vidiscover.scale.parallel_map`).
+    With ``n_jobs`` processes (None: all cores) and no Dask scheduler, a
+    :class:`~vidiscover._workers.WorkerPool` of ``n_jobs - 1`` workers is started at
+    once; they warm up (:func:`_warm_up`) while this process analyses the recording
+    and simulates the nominal model, and every batch of tasks is then shared between
+    this process and the warm workers, the costliest first, each process taking the
+    next task when it is free. (A pool of ``n_jobs`` workers started at the candidate
+    fits left a core idle while the parent worked alone, and then paid every worker's
+    start-up before the first fit.) The results do not depend on who ran a task. With
+    a scheduler, batches go to Dask (:func:`~vidiscover.scale.parallel_map`).
 
     On Linux the workers are forks of this process (they start with its imports, and
     its BLAS held to one thread; no interpreter start, no resource tracker: a loky
@@ -723,73 +720,19 @@ class _Runner:
     def __init__(self, n_jobs: int | None, scheduler) -> None:
         n = n_workers(n_jobs) if scheduler is None else 1
         self.scheduler = scheduler
-        self.executor = fork_executor(n - 1) if n > 1 else None
-        self.warm: list = []
-        self.forked = self.executor is not None
-        if n > 1 and not self.forked:
-            from joblib.externals.loky import get_reusable_executor
-
-            self.executor = get_reusable_executor(max_workers=n - 1, timeout=300,
-                                                  env=_ONE_THREAD)
-        if self.executor is not None:
-            self.warm = [self.executor.submit(_warm_up) for _ in range(n - 1)]
+        self.pool = WorkerPool(n - 1, warm_up=_warm_up, spawn_env=_ONE_THREAD)
 
     def close(self) -> None:
         """Stop forked workers (loky's reusable ones stay for the next diagnosis)."""
-        if self.forked and self.executor is not None:
-            self.executor.shutdown(wait=True, cancel_futures=True)
-            self.executor = None
+        self.pool.close()
 
     def __call__(self, worker, items, cost=None) -> list:
         """``[worker(i) for i in items]``; ``cost(item)``: relative cost (costliest first)."""
-        items = list(items)
         if self.scheduler is not None:
             from ..scale import parallel_map
 
-            return parallel_map(worker, items, scheduler=self.scheduler, progress=False)
-        if self.executor is None or len(items) <= 1:
-            return [worker(i) for i in items]
-        order = list(range(len(items)))
-        if cost is not None:
-            order.sort(key=lambda i: -cost(items[i]))
-        queue = collections.deque(order)
-        lock = threading.Lock()
-        out: list = [None] * len(items)
-        errors: list = []
-
-        def take():
-            with lock:
-                return queue.popleft() if queue else None
-
-        def remote(warm) -> None:
-            # a worker still starting takes nothing (this process may finish first)
-            while not warm.done():
-                if not queue:
-                    return
-                concurrent.futures.wait([warm], timeout=0.02)
-            if warm.exception() is not None:
-                return
-            try:
-                while (i := take()) is not None:
-                    out[i] = self.executor.submit(worker, items[i]).result()
-            except BaseException as exc:  # noqa: BLE001 - re-raised in the caller
-                errors.append(exc)
-
-        threads = [threading.Thread(target=remote, args=(w,), daemon=True)
-                   for w in self.warm]
-        for t in threads:
-            t.start()
-        try:
-            while (i := take()) is not None:
-                out[i] = worker(items[i])
-        finally:
-            with lock:
-                queue.clear()
-            for t in threads:
-                t.join()
-        if errors:
-            raise errors[0]
-        return out
+            return parallel_map(worker, list(items), scheduler=self.scheduler, progress=False)
+        return self.pool.map(worker, items, cost=cost)
 
 
 def diagnose(rec, *, seed: int = 0, n_jobs: int | None = None, scheduler=None,
