@@ -1,8 +1,9 @@
 """Worker processes for the stages that run independent tasks side by side.
 
-Shared by :mod:`vidiscover.discovery` (recordings analysed and impact laws fitted side
-by side), :mod:`vidiscover.gap` (candidate fits) and :mod:`vidiscover.scale` (sweeps):
-one check of ``n_jobs`` and one way to start forked workers.
+One check of ``n_jobs`` (:func:`n_workers`, also used by :mod:`vidiscover.scale`'s
+sweeps, which run on joblib or Dask) and one runner, :class:`WorkerPool`, shared by
+:mod:`vidiscover.discovery` (recordings analysed and impact laws fitted side by side)
+and :mod:`vidiscover.gap` (candidate fits).
 
 A forked worker starts with this process's imports and inputs in memory: about 0.1 s,
 where a spawned interpreter (loky's) first pays 1-2 s of imports, as long as one
