@@ -6,7 +6,7 @@ import pytest
 
 from vidiscover.effects import Effects
 from vidiscover.gap.components import GapComponents
-from vidiscover.gap.diagnose import GapReport, _pair_items, _split_pair
+from vidiscover.gap.diagnose import GapReport, _keep_pair, _pair_items, _pair_search, _split_pair
 from vidiscover.gap.fit import CandidateFit
 
 
@@ -40,6 +40,35 @@ def test_pair_order_follows_the_better_single_effect():
                 {"inclination": {"theta": 3.0}, "coulomb_friction": {"mu": 0.15}}, 2)
     assert [c.name for c in _split_pair(pair, [fa, fb])] == ["coulomb_friction",
                                                              "inclination"]
+
+
+def test_pairs_are_searched_where_the_best_effect_leaves_more_than_one_effect_does():
+    # a gap above 8 left, or 4-8 left by a small effect: pairs of any size
+    assert _pair_search(_fit("asymmetric_restitution", 12.0, n_params=2)) == (True, None)
+    assert _pair_search(_fit("asymmetric_restitution", 5.9, n_params=2)) == (True, None)
+    # what correct single effects leave (below 4): no pair
+    assert _pair_search(_fit("coulomb_friction", 3.5)) == (False, None)
+    # a law per wall: pairs no richer than itself, whatever it leaves
+    law = "velocity_dependent_restitution"
+    assert _pair_search(_fit(law, 3.5, n_params=4)) == (True, 4)
+    assert _pair_search(_fit(law, 6.0, n_params=4)) == (True, 4)
+
+
+def test_a_pair_after_a_small_gap_must_remove_4_and_leave_at_most_30_percent():
+    best = _fit("asymmetric_restitution", 5.9, n_params=2)
+
+    def pair(gap):
+        return _fit("asymmetric_restitution+inclination", gap, n_params=3)
+
+    assert _keep_pair(best, pair(1.7), None)          # removes 4.2, leaves 29 %
+    assert not _keep_pair(best, pair(2.0), None)      # removes 3.9
+    assert _keep_pair(_fit("coulomb_friction", 4.5), pair(0.4), None)      # removes 4.1
+    assert not _keep_pair(_fit("coulomb_friction", 4.5), pair(0.6), None)  # 3.9
+    assert not _keep_pair(best, None, None)
+    # above 8 the share-of-what-is-left rule holds (removes > 0.3 * (gap - 1) and > 2)
+    big = _fit("asymmetric_restitution", 20.0, n_params=2)
+    assert _keep_pair(big, pair(10.0), None)
+    assert not _keep_pair(big, pair(16.0), None)
 
 
 def test_pairs_tried_include_forward_selection_and_effects_that_failed_alone():
