@@ -1,4 +1,5 @@
-"""Planning a sweep (SweepSpec) in the parent process: same checks, no simulator import."""
+"""Planning a sweep (SweepSpec) in the parent process: the simulator's own checks, and
+none of the heavy imports a worker needs (scipy.integrate/optimize, numba)."""
 
 from __future__ import annotations
 
@@ -9,31 +10,22 @@ import sys
 import pytest
 
 from vidiscover.errors import InputError
-from vidiscover.simulation.engine import SimOptions
-from vidiscover.sweep import _check_times
-
-TIMES = [0.0, 1.0, 10.0, 5.12, -1.0, -0.0, 1e-300, math.inf, -math.inf, math.nan, 3, True]
+from vidiscover.sweep import SweepSpec
 
 
-def _verdict(func, settle, duration):
-    try:
-        func(settle, duration)
-    except (InputError, TypeError) as err:
-        return type(err).__name__, str(err)
-    return None
+@pytest.mark.parametrize(("settle", "duration", "message"), [
+    (-1.0, 5.0, "settle must be >= 0 s"), (math.nan, 5.0, "settle must be >= 0 s"),
+    (1.0, 0.0, "duration must be > 0 s"), (1.0, math.inf, "duration must be > 0 s")])
+def test_times_are_checked_by_the_simulator_options(settle, duration, message):
+    with pytest.raises(InputError, match=message):
+        SweepSpec("b", (0.005,), settle=settle, duration=duration)
 
 
-@pytest.mark.parametrize("settle", TIMES + ["x", None])
-def test_times_are_checked_as_the_simulator_checks_them(settle):
-    for duration in TIMES + ["x"]:
-        want = _verdict(lambda s, d: SimOptions(settle=s, duration=d), settle, duration)
-        assert _verdict(_check_times, settle, duration) == want, (settle, duration)
-
-
-def test_planning_a_sweep_does_not_import_the_simulator():
+def test_planning_a_sweep_loads_no_heavy_simulator_import():
     code = ("import sys; from vidiscover.sweep import SweepSpec; "
             "SweepSpec('b', (0.005, 0.01)); SweepSpec('mu', (0.1,)); SweepSpec('noise', (2.0,)); "
-            "print('vidiscover.simulation' in sys.modules)")
+            "print(sorted({'scipy.integrate', 'scipy.optimize', 'numba',"
+            " 'vidiscover.simulation.compliant'} & set(sys.modules)))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
-    assert out.stdout.strip() == "False"
+    assert out.stdout.strip() == "[]"

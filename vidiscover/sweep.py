@@ -118,19 +118,6 @@ def resolve_param(name: str) -> tuple[str, str | None, str]:
     raise InputError(f"--param {name!r}: unknown parameter; {hint}")
 
 
-def _check_times(settle, duration) -> None:
-    """``SimOptions``' checks of ``settle`` and ``duration``, with its messages.
-
-    Written out so that the process that plans a sweep does not import the simulator
-    (``vidiscover.simulation`` loads scipy.integrate and scipy.optimize: ~0.4 s of CPU
-    before any worker starts); a test checks that both give the same verdicts.
-    """
-    if not (math.isfinite(settle) and settle >= 0):
-        raise InputError(f"settle must be >= 0 s, was {settle!r}")
-    if not (math.isfinite(duration) and duration > 0):
-        raise InputError(f"duration must be > 0 s, was {duration!r}")
-
-
 @dataclass(frozen=True)
 class SweepSpec:
     """What a sweep does at every point (an immutable value).
@@ -191,7 +178,9 @@ class SweepSpec:
                 and self.threshold > 0):
             raise InputError(f"threshold must be > 0 (matched-filter SNR of the impact "
                              f"detector), was {self.threshold!r}")
-        _check_times(self.settle, self.duration)
+        from .simulation.engine import SimOptions  # (the compliant engine stays unloaded)
+
+        SimOptions(settle=self.settle, duration=self.duration)  # validates both
         for v in values:  # fail on a bad value now, not on a worker half-way through
             try:
                 self.configure(v)
