@@ -23,6 +23,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..analysis.signals import fill_gaps, robust_std
+
 __all__ = ["STATS", "Signature", "GapComponents", "measure", "compare", "noise_scales",
            "energy_distance", "mirror", "GROUPS", "FORM_SCALE"]
 
@@ -385,8 +387,7 @@ def _laser_momentum(rec, an, mr: float, *, quality: bool = False
     bad = (np.cumsum(cut)[:t.size] > 0) | ~np.isfinite(a)
     if bad.all():
         return {}
-    a = a.copy()
-    a[bad] = np.interp(t[bad], t[~bad], a[~bad])
+    a = fill_gaps(a, bad)
     y = np.asarray(rec.x, dtype=float) - np.cumsum(np.cumsum(a)) / (fs * fs)
     nmax = int(math.ceil(KINK_WINDOW * fs)) + 1
     c = np.searchsorted(t, ti[i])
@@ -414,8 +415,6 @@ def _laser_momentum(rec, an, mr: float, *, quality: bool = False
     if quality:
         # median RMS residual of the kink fits over the laser's white noise (third
         # differences: 20 s^2 for white noise of standard deviation s)
-        from ..analysis.signals import robust_std
-
         res = (yy[..., None] - A @ coef[..., None])[..., 0]
         rms = np.sqrt((w * res * res).sum(1) / np.maximum(w.sum(1) - 4.0, 1.0))
         x = np.asarray(rec.x, dtype=float)
