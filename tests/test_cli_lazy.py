@@ -8,14 +8,19 @@ from click.testing import CliRunner
 from vidiscover import cli
 
 
+def _python(code: str) -> str:
+    """What ``code`` prints in a fresh interpreter (its imports start from nothing)."""
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          check=True).stdout
+
+
 def test_help_lists_every_installed_command_without_importing_them():
     code = ("import sys; from click.testing import CliRunner; from vidiscover.cli import main;"
             "r = CliRunner().invoke(main, ['--help']); print(r.output);"
             "heavy = [m for m in ('numpy', 'scipy', 'pandas', 'matplotlib', 'sklearn', 'pysindy',"
             " 'numba')"
             " if m in sys.modules]; print('HEAVY', heavy)")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True).stdout
+    out = _python(code)
     assert "HEAVY []" in out
     for name in ("simulate", "demo", *cli.main.lazy_commands):
         assert f"  {name} " in out
@@ -42,8 +47,7 @@ def test_numba_loads_with_the_first_simulation_not_with_the_package():
             "from vidiscover import preset, simulate;"
             "simulate(preset('paper', b=0.009), settle=0.0, duration=0.2);"
             "print('AFTER', 'numba' in sys.modules)")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True).stdout
+    out = _python(code)
     assert "BEFORE False" in out and "AFTER True" in out
 
 
@@ -56,8 +60,7 @@ def test_the_compliant_engine_loads_with_its_first_use():
             "print('EXACT', sorted({'scipy.integrate', 'scipy.optimize'} & set(sys.modules)));"
             "print('NAMES', s.simulate_reference.__module__, s.CompliantResult.__name__);"
             "print('AFTER', 'scipy.integrate' in sys.modules)")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True).stdout
+    out = _python(code)
     assert "EXACT []" in out
     assert "NAMES vidiscover.simulation.compliant CompliantResult" in out
     assert "AFTER True" in out
