@@ -26,12 +26,14 @@ from vidiscover.discovery import (
     ImpactLawResult,
     discover,
     discover_impact_law,
+    impact_law,
     same_form,
 )
 from vidiscover.discovery.impact_law import (
     EFFECT_PER_SIGMA,
     RISING_FACTOR,
     SCALED_EFFECT_FLOOR,
+    UNESTIMATED_SCATTER,
     _change_error,
 )
 from vidiscover.errors import InputError
@@ -435,13 +437,40 @@ def test_an_error_repeated_by_every_cycle_is_not_a_law():
     res = discover_impact_law(v, r, sigma=sigma, n_boot=0)
     assert res.kind == "constant", res.formula
     assert "standard error 0.054 of the change of r" in res.note
-    # two speed clusters: hypot of their errors, scaled from the clusters' mean speeds
-    # to the 1st-99th percentile span of the speeds
-    assert res.effect_threshold == pytest.approx(1.5 * math.hypot(0.0464, 0.0265), rel=0.01)
+    # two speed clusters: hypot of their errors (each with the unestimated excess
+    # scatter: the best law passes through both means), scaled from the clusters' mean
+    # speeds to the 1st-99th percentile span of the speeds
+    s2 = UNESTIMATED_SCATTER ** 2
+    assert res.effect_threshold == pytest.approx(
+        1.5 * math.sqrt(0.0464 ** 2 + 0.0265 ** 2 + 2 * s2), rel=0.01)
     assert "r rises with speed" in res.note and "rising=True" in res.note
     assert res.warning is None  # below the threshold: no claim of biased estimates
+    # two clusters: the unestimated excess scatter (0.005 per cluster) holds the rise
+    # below 4 x the threshold; without it the precise errors let it through
     precise = discover_impact_law(v, r, sigma=np.full(29, 0.001), n_boot=0, rising=True)
+    assert precise.kind == "constant"
+    with pytest.MonkeyPatch.context() as mp:
+        mp.setattr(impact_law, "UNESTIMATED_SCATTER", 0.0)
+        precise = discover_impact_law(v, r, sigma=np.full(29, 0.001), n_boot=0, rising=True)
     assert precise.velocity_dependent and precise.effect > 0.03
+
+
+def test_two_precise_clusters_need_more_than_their_standard_errors(monkeypatch):
+    """Realism test split, test-042 right (Kelvin-Voigt, r 0.394 throughout): two speed
+    clusters at 3.6 and 4.0 m/s read r 0.4262 and 0.4197 with standard errors of 2e-4
+    and 3e-4. A two-coefficient law passes through both means, so nothing estimates
+    the systematic scatter of the cluster means: UNESTIMATED_SCATTER stands in for it
+    and the 0.0066 change stays below the threshold (constant). Without it the change
+    is 18 standard errors: ``0.48 - 0.0149 v`` was reported."""
+    rng = np.random.default_rng(42)
+    v = np.r_[np.full(19, 3.595), np.full(20, 4.035)] + rng.normal(0, 0.01, 39)
+    r = np.r_[np.full(19, 0.4262), np.full(20, 0.4197)] + rng.normal(0, 1e-4, 39)
+    sigma = np.r_[np.full(19, 2e-4), np.full(20, 3e-4)]
+    res = discover_impact_law(v, r, sigma=sigma, n_boot=0)
+    assert res.kind == "constant", res.formula
+    assert res.effect_threshold == pytest.approx(0.0114, abs=0.0003)
+    monkeypatch.setattr(impact_law, "UNESTIMATED_SCATTER", 0.0)
+    assert discover_impact_law(v, r, sigma=sigma, n_boot=0).velocity_dependent
 
 
 @pytest.mark.slow
