@@ -40,7 +40,7 @@ from ..errors import InputError
 from .diagnose import _clean
 
 __all__ = ["Case", "CASES_FULL", "CASES_QUICK", "CASES_CI", "CASES_EXTRA", "extra_cases",
-           "drawn_cases",
+           "drawn_cases", "case_recording",
            "TARGETS", "battery_cases", "run_case", "gap_check", "summarise", "verdicts"]
 
 #: Restitution of both walls in the simulated "real" recordings (unless an effect sets it).
@@ -347,14 +347,12 @@ TARGETS = {
 }
 
 
-def run_case(case: Case) -> dict:
-    """Simulate one case, diagnose it (in-process) and score the verdict."""
+def case_recording(case: Case) -> tuple:
+    """The simulated "real" recording of a case and its truth (regime label)."""
     from ..params import preset
     from ..sensors import SensorConfig
     from ..workflows import simulate_to_memory
-    from .diagnose import diagnose
 
-    t0, c0 = time.perf_counter(), time.process_time()
     contact = None
     if case.contact:
         from ..simulation.contact import ContactModel
@@ -366,6 +364,15 @@ def run_case(case: Case) -> dict:
     rec, truth, _ = simulate_to_memory(params, Effects.parse(list(case.spec)), seed=case.seed,
                                        contact=contact, sensors=SensorConfig(**dict(case.sensors)),
                                        name=f"{case.effect}-{case.magnitude}-{case.b * 1e3:g}mm")
+    return rec, truth
+
+
+def run_case(case: Case) -> dict:
+    """Simulate one case, diagnose it (in-process) and score the verdict."""
+    from .diagnose import diagnose
+
+    t0, c0 = time.perf_counter(), time.process_time()
+    rec, truth = case_recording(case)
     rep = diagnose(rec, n_jobs=1, candidates=case.candidates)
     d = rep.to_dict()
     top = rep.selected[0] if rep.selected else None

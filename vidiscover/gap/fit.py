@@ -569,6 +569,8 @@ class _SensorObjective:
         self.model = model
         self.result = _simulate(model, base, r)
         self.base = base
+        self._own = None
+        self.own_sig = None
 
     def signature(self, name: str, **params) -> Signature:
         fx = self.base.with_effect(name, **params)
@@ -579,11 +581,28 @@ class _SensorObjective:
         fx = self.base.with_effect(name, **params)
         return gap_of(self.model, self.signature(name, **params), fx).total
 
-    def own_gap(self, prefix: str) -> float:
-        """Gap of the base model on the statistics starting with ``prefix``."""
-        sig = _record(self.model, self.result, 0)
-        g = gap_of(self.model, sig, self.base)
-        return sum(v for k, v in g.per_stat.items() if k.startswith(prefix))
+    def own_gap(self, prefix: str | tuple) -> float:
+        """Gap of the base model on the statistics starting with ``prefix`` (or any of them)."""
+        return sum(v for k, v in self.own().per_stat.items() if k.startswith(prefix))
+
+    def own(self) -> GapComponents:
+        """Gap of the base model's re-recording (recorded once)."""
+        if self._own is None:
+            self.own_sig = _record(self.model, self.result, 0)
+            self._own = gap_of(self.model, self.own_sig, self.base)
+        return self._own
+
+    def impacts_lost(self) -> bool:
+        """The base model's re-recording shows no impact while the recording does.
+
+        Both walls below :data:`_NO_RATE` impacts per cycle on the model's side, at
+        least :data:`_SOME_RATE` in all on the recording's.
+        """
+        self.own()
+        got = [self.own_sig.values.get(k, math.nan) for k in _RATES]
+        want = [self.model.real.values.get(k, math.nan) for k in _RATES]
+        return bool(all(not np.isfinite(g) or g < _NO_RATE for g in got)
+                    and np.nansum(want) >= _SOME_RATE)
 
 
 #: Below this gap on its own statistics a sensor effect has nothing to explain and is
@@ -592,16 +611,39 @@ class _SensorObjective:
 #: width's was 6 like the bands' sum, which left a 0.5 ms contact unsearched whose
 #: pulse width carried most of a significant gap (9.4) and made it "unexplained".
 _SENSOR_QUIET = {"sensors.pulse_width": 2.0, "sensors.residual": 6.0}
+#: The contact duration is also searched when the model's re-recording shows no impact
+#: on either wall (below ``_NO_RATE`` per cycle) and the recording shows some
+#: (``_SOME_RATE`` in all): with a 0.8-1.2 ms contact at 6400 Hz the instrument learned
+#: from the recording absorbs part of the long pulse (fresh draw 27182 #7: a 5.8 kHz
+#: mount resonance), the pulse width shows nothing, and the nominal model's recordings
+#: through that instrument, analysed with their short known pulse, detected no impact
+#: (draws 27182 #7 and 31415 #19: nominal gaps 2240 and 2231, all of it in the rates,
+#: "unexplained"; the 1.1 ms contact re-recorded takes the first to 18). Narrow on
+#: purpose: a rate difference of any size is what every restitution effect makes.
+_NO_RATE = 0.05
+_SOME_RATE = 0.5
+_RATES = ("right.rate", "left.rate")
 
 
 def _fit_contact(model: Model, base: Effects):
     so = _SensorObjective(model, base, model.params.r)
+    by_rate = False
     if so.own_gap("sensors.pulse_width") < _SENSOR_QUIET["sensors.pulse_width"]:
-        return {"tau": 2e-5}, 1, model.params.r, 1
+        if not so.impacts_lost():
+            return {"tau": 2e-5}, 1, model.params.r, 1
+        by_rate = True
     lo, hi = math.log(2e-5), math.log(4e-3)
     best = _minimise_1d(lambda u: so.gap("contact_duration", tau=math.exp(u)), lo, hi,
                         n_grid=7, n_golden=6, refine=model.refine)
-    return {"tau": float(math.exp(best))}, 1, model.params.r, 1
+    tau = float(math.exp(best))
+    if not by_rate or not model.refine:
+        return {"tau": tau}, 1, model.params.r, 1
+    # the model's one r was fitted where its recordings showed no impact (the short
+    # pulse): re-fit it with the contact (27182 #7: r_level 8.5 per wall left)
+    obj = _Objective(model, lambda _: base.with_effect("contact_duration", tau=tau),
+                     model.real.r_pooled)
+    obj(0.0)
+    return {"tau": tau}, 1, obj.r_at(0.0), 1 + obj.n_sims
 
 
 def _fit_resonance(model: Model, base: Effects):
