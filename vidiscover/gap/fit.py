@@ -93,6 +93,9 @@ class Model:
         cut-off, mounted resonance); the model's recordings go through it, so the
         instrument is compared like for like and does not show as a model gap.
         Empty: the default sensors.
+    full : Signature, optional
+        The recording's statistics with the laser-kink ones, where ``real`` leaves
+        them out (:func:`~vidiscover.gap.diagnose.nominal_model`'s second look).
     """
 
     params: SystemParams
@@ -107,6 +110,7 @@ class Model:
     alt_speed: float = 0.45
     instrument: dict = field(default_factory=dict)
     refine: bool = True
+    full: Signature | None = field(default=None, repr=False)
 
     def with_rep_var(self, rep_var: dict) -> Model:
         """A copy with replicate variances."""
