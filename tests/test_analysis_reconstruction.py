@@ -32,6 +32,20 @@ def _ball_rms(out, truth):
     return float(np.sqrt(np.mean((y[ok] - y_true[ok]) ** 2))), ok.mean()
 
 
+def test_rigid_walls_take_no_contact_time():
+    """The exact engine's walls are rigid (a learned or given contact duration of 0):
+    every flight starts at its impact, from the impact's own states."""
+    out, _ = analysed(0.009)
+    det, rc = out.detection, out.reconstruction
+    fl, ic = rc.flight_columns, rc.impact_columns
+    assert det.pulse.tau == 0 and (det.response is None or det.response.model_for(-1).tau == 0)
+    i = fl["i_start"]
+    assert np.array_equal(fl["t_start"], det.t[i])
+    assert np.array_equal(fl["y_start"], ic["y"][i])
+    assert np.array_equal(fl["v_start"], ic["v_plus"][i])
+    assert np.array_equal(ic["u_plus"], ic["w_plus"] - ic["v_plus"], equal_nan=True)
+
+
 @pytest.mark.parametrize("b", CLEARANCES)
 def test_ball_position_is_reconstructed(b):
     out, truth = analysed(b)

@@ -77,10 +77,17 @@ class FlightData:
             taus = (tau, tau)
         self.tau = np.where(self.sign > 0, taus[0], taus[1])
         self.reliable = np.asarray(det.columns["reliable"], bool)
-        self.ts = np.asarray(fl["t_start"], float)
-        self.te = np.asarray(fl["t_end"], float)
         self.i_s = np.asarray(fl["i_start"], np.int64)
         self.i_e = np.asarray(fl["i_end"], np.int64)
+        # flights from impact to impact (the flight law's weak form takes the contacts
+        # as instantaneous at their entries) ...
+        self.ts = self.t_imp[self.i_s]
+        self.te = np.asarray(fl["t_end"], float)
+        # ... and the reconstruction's, each from its contact's exit (time, ball
+        # position, LO velocity; the impact's own where the contact takes no time)
+        self.exit_t = np.asarray(fl["t_start"], float)
+        self.exit_y = np.asarray(fl["y_start"], float)
+        self.exit_v = np.asarray(fl["v_start"], float)
         self.kind = np.asarray(fl["kind"])
         t = np.asarray(recon.t, float)
         # LO velocity without its jumps, to be evaluated anywhere inside a flight
@@ -127,6 +134,9 @@ class FlightData:
                                  f"({self.dv.size}), got shape {val.shape}")
             setattr(out, name, val)
         out.ts, out.te = out.t_imp[self.i_s], out.t_imp[self.i_e]
+        # instantaneous impacts at the given points
+        out.exit_t, out.exit_y = out.ts, out.y_imp[self.i_s]
+        out.exit_v = out.v_plus[self.i_s]
         return out
 
     def equivalent_impacts(self) -> FlightData:
@@ -235,9 +245,9 @@ def reconstruct_flights(t_s, t_e, y_s, y_e, v_start, v_end, lo_velocity, lo_acce
 def solve_free_flights(data: FlightData, mu: float, theta_deg: float) -> dict:
     """Ball launch/arrival velocities of every free flight under a flight law.
 
-    The flights of the reconstruction are solved again with friction ``mu`` and
-    inclination ``theta_deg`` (:func:`reconstruct_flights`) along the measured LO
-    motion.
+    The flights of the reconstruction (each from its contact's exit to the next
+    contact's entry) are solved again with friction ``mu`` and inclination
+    ``theta_deg`` (:func:`reconstruct_flights`) along the measured LO motion.
 
     Parameters
     ----------
@@ -256,13 +266,14 @@ def solve_free_flights(data: FlightData, mu: float, theta_deg: float) -> dict:
     """
     mu, theta = max(float(mu), 0.0), float(theta_deg)
     k = np.flatnonzero(data.kind == "free")
-    v0, v1 = data.v_plus[data.i_s[k]], data.v_minus[data.i_e[k]]
-    fl = reconstruct_flights(data.ts[k], data.te[k], data.y_imp[data.i_s[k]],
+    v0, v1 = data.exit_v[k], data.v_minus[data.i_e[k]]
+    fl = reconstruct_flights(data.exit_t[k], data.te[k], data.exit_y[k],
                              data.y_imp[data.i_e[k]], v0, v1, data.lo_velocity,
                              data.lo_acceleration, mu, theta)
     zd = fl["zd"]
     nz = np.where(zd == 0, 0.0, np.sign(zd))
     changes = np.array([int(np.count_nonzero(np.diff(r[r != 0]))) for r in nz], dtype=np.int64)
-    return {"flight": k, "t_start": data.ts[k], "t_end": data.te[k], "w_start": fl["w"][:, 0],
+    return {"flight": k, "t_start": data.exit_t[k], "t_end": data.te[k],
+            "w_start": fl["w"][:, 0],
             "w_end": fl["w"][:, -1], "zd_start": fl["w"][:, 0] - v0,
             "zd_end": fl["w"][:, -1] - v1, "sign_changes": changes}

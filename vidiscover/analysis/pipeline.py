@@ -343,7 +343,9 @@ def _tilted(recon: Reconstruction, det: ImpactDetection, rec, mu: float,
     ic["w_plus"][fc["i_start"][k]] = sol["w_start"]
     ic["w_minus"][fc["i_end"][k]] = sol["w_end"]
     ic["u_minus"] = ic["w_minus"] - ic["v_minus"]
-    ic["u_plus"] = ic["w_plus"] - ic["v_plus"]
+    v_exit = np.array(ic["v_plus"], copy=True)        # the LO at each contact's exit
+    v_exit[fc["i_start"]] = fc["v_start"]
+    ic["u_plus"] = ic["w_plus"] - v_exit
     from dataclasses import replace
 
     return replace(recon, impact_columns=ic, flight_columns=fc)

@@ -12,7 +12,14 @@ laser's sheet resonance; ``v_disp`` is the laser derivative (the paper's
 ``v_plus = v_minus + dv``.
 
 **Ball.** At an impact on the wall of sign s (+1 right, -1 left) the ball is at
-``y = x + s b`` (eq. 5). Between consecutive impacts it flies:
+``y = x + s b`` (eq. 5). A compliant wall holds the ball for a contact duration
+``tau`` (the learned pulse response's, per wall; 0 for the exact engine's rigid
+walls): the ball arrives at the contact entry (the detected impact time) and leaves
+at the exit ``t + tau``, from ``x(t + tau) + s b`` with the LO moving at
+``v(t + tau)``, so its outgoing flight starts there and ``u+`` is taken there. On a
+rig whose LO accelerates hard during a long contact this is what r compares (its
+entry and exit speeds); an impact taken as instantaneous at the entry misreads it.
+Between consecutive contacts the ball flies:
 
 * without friction (``mu = 0``) in a straight line (eq. 6);
 * with friction by :func:`~vidiscover.analysis.friction.solve_flights` (eq. 8
@@ -328,15 +335,17 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
     def lo_x(tq):
         return np.interp(tq - t[0], tr, x_f)
 
+    exits = _exits(det, t_imp, side, x_imp, v_plus, b, lo_x, lo_velocity)
     flights, traj = _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f,
-                             det.baseline, fs, stick_tol, lo_x, lo_acc, lo_velocity)
+                             det.baseline, fs, stick_tol, lo_x, lo_acc, lo_velocity, exits)
     del lo_velocity, lo_acc, lo_x
     tr = None                        # (dropped before the laser derivative)
     VD = None                        # (dropped before the next full-length array)
     xl_f = fill_gaps(xl, ~okx) if not okx.all() else xl
     v_disp = _gradient(xl_f, dt)
     del xl_f
-    impacts = _impact_columns(t_imp, det.side, x_imp, y_imp, v_minus, v_plus, dv, flights)
+    impacts = _impact_columns(t_imp, det.side, x_imp, y_imp, v_minus, v_plus, dv, flights,
+                              exits[3])
     return Reconstruction(t=t, x=x_f, v=v_f, v_disp=v_disp, impact_columns=impacts,
                           flight_columns=flights, b=b, mu=float(mu),
                           position_noise=float(position_noise), _traj=traj)
@@ -491,18 +500,24 @@ def refly(recon: Reconstruction, det: ImpactDetection, mu: float, *,
 
     ic = recon.impact_columns
     side = det.sign.astype(float)
+    exits = _exits(det, det.t, side, ic["x"], ic["v_plus"], b, lo_x, lo_velocity)
     flights, traj = _flights(det.t, side, ic["x"], ic["y"], ic["v_minus"], ic["v_plus"], b,
                              float(mu), t, recon.x, det.baseline, fs, stick_tol, lo_x,
-                             lo_acc, lo_velocity)
+                             lo_acc, lo_velocity, exits)
     impacts = _impact_columns(det.t, det.side, ic["x"], ic["y"], ic["v_minus"],
-                              ic["v_plus"], dv, flights)
+                              ic["v_plus"], dv, flights, exits[3])
     return Reconstruction(t=t, x=recon.x, v=v, v_disp=recon.v_disp, impact_columns=impacts,
                           flight_columns=flights, b=b, mu=float(mu),
                           position_noise=recon.position_noise, _traj=traj)
 
 
-def _impact_columns(t_imp, side_names, x_imp, y_imp, v_minus, v_plus, dv, flights) -> dict:
-    """Per-impact states, the ball's velocities taken from the flights about each."""
+def _impact_columns(t_imp, side_names, x_imp, y_imp, v_minus, v_plus, dv, flights,
+                    v_exit) -> dict:
+    """Per-impact states, the ball's velocities taken from the flights about each.
+
+    ``u_plus`` is taken at the contact exit (LO velocity ``v_exit``; ``v_plus`` for an
+    instantaneous impact), ``u_minus`` at the entry.
+    """
     m = t_imp.size
     w_minus = np.full(m, np.nan)
     w_plus = np.full(m, np.nan)
@@ -518,8 +533,45 @@ def _impact_columns(t_imp, side_names, x_imp, y_imp, v_minus, v_plus, dv, flight
     return {
         "t": t_imp, "side": side_names, "x": x_imp, "y": y_imp, "v_minus": v_minus,
         "v_plus": v_plus, "dv": dv, "w_minus": w_minus, "w_plus": w_plus,
-        "u_minus": w_minus - v_minus, "u_plus": w_plus - v_plus,
+        "u_minus": w_minus - v_minus, "u_plus": w_plus - v_exit,
         "flight_in": f_in, "flight_out": f_out}
+
+
+def contact_durations(det: ImpactDetection) -> np.ndarray:
+    """Contact duration (s) of each detected impact: its wall's, from the pulse response.
+
+    The learned response's ``tau`` per wall (:class:`.pulse.PulseResponse`), or the
+    given pulse model's (0 for the exact engine's rigid walls).
+    """
+    sign = np.asarray(det.sign, dtype=float)
+    resp = getattr(det, "response", None)
+    if resp is not None:
+        taus = (float(resp.model_for(1).tau), float(resp.model_for(-1).tau))
+    else:
+        tau = float(getattr(getattr(det, "pulse", None), "tau", 0.0) or 0.0)
+        taus = (tau, tau)
+    tau = np.where(sign > 0, taus[0], taus[1])
+    return np.where(np.isfinite(tau) & (tau > 0), tau, 0.0)
+
+
+def _exits(det, t_imp, side, x_imp, v_plus, b, lo_x, lo_velocity):
+    """``(t, x, y, v)`` at each contact's exit: time, LO and ball positions, LO velocity.
+
+    See the module docs.
+
+    ``t + tau`` (:func:`contact_durations`), at most half-way to the next impact; the
+    impact's own states where ``tau`` is 0 (so rigid walls give the instantaneous
+    impact exactly).
+    """
+    tau = contact_durations(det)
+    if not np.any(tau > 0):
+        return t_imp, x_imp, x_imp + side * b, v_plus
+    gap = np.diff(t_imp, append=np.inf)
+    te = t_imp + np.minimum(tau, 0.5 * gap)
+    long = te > t_imp
+    x_e = np.where(long, lo_x(te), x_imp)
+    v_e = np.where(long, lo_velocity(te), v_plus)
+    return te, x_e, x_e + side * b, v_e
 
 
 def _first_samples(t: np.ndarray, ti: np.ndarray, fs: float) -> np.ndarray:
@@ -562,8 +614,11 @@ def _first_where(cond, starts: np.ndarray, ends: np.ndarray, part: int = _PART) 
 
 
 def _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f, acc, fs,
-             stick_tol, lo_x, lo_acc, lo_velocity):
-    """Flight table between consecutive impacts (see the module docs)."""
+             stick_tol, lo_x, lo_acc, lo_velocity, exits):
+    """Flight table between consecutive contacts, each from an exit to the next entry.
+
+    ``exits``: ``(t, x, y, v)`` at each contact's exit (:func:`_exits`).
+    """
     m = t_imp.size
     nf = max(m - 1, 0)
     if nf == 0:
@@ -575,10 +630,12 @@ def _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f, acc, fs,
         return cols, {}
     i_s = np.arange(nf)
     i_e = i_s + 1
-    ts, te = t_imp[:-1], t_imp[1:]
+    t_exit, x_exit, y_exit, v_exit = exits
+    ts, te = t_exit[:-1], t_imp[1:]
     dur = te - ts
     ss, se = side[:-1], side[1:]
-    ys, ye = y_imp[:-1], y_imp[1:]
+    ys, ye = y_exit[:-1], y_imp[1:]
+    v_start = v_exit[:-1]
     w_mean = (ye - ys) / dur
     mug = mu * G_ACCEL
 
@@ -627,7 +684,7 @@ def _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f, acc, fs,
         y_release = y_free
     else:
         # free hypothesis for every flight, stick hypothesis for the candidates
-        sol = solve_flights(ts, te, ys, ye, lo_velocity, lo_acc, mu, v_start=v_plus[:-1],
+        sol = solve_flights(ts, te, ys, ye, lo_velocity, lo_acc, mu, v_start=v_start,
                             v_end=v_minus[1:])
         closure = np.full(nf, np.nan)
         stick = np.zeros(nf, dtype=bool)
@@ -664,10 +721,10 @@ def _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f, acc, fs,
         "side_start": np.where(ss > 0, "right", "left"),
         "side_end": np.where(se > 0, "right", "left"),
         "kind": np.where(stick, "stick", "free"),
-        "t_release": t_release, "y_start": ys, "y_end": ye, "x_start": x_imp[:-1],
-        "x_end": x_imp[1:], "v_start": v_plus[:-1], "v_end": v_minus[1:],
+        "t_release": t_release, "y_start": ys, "y_end": ye, "x_start": x_exit[:-1],
+        "x_end": x_imp[1:], "v_start": v_start, "v_end": v_minus[1:],
         "w_start": w_start, "w_end": w_end, "w_mean": w_mean,
-        "zd_start": w_start - v_plus[:-1], "zd_end": w_end - v_minus[1:],
+        "zd_start": w_start - v_start, "zd_end": w_end - v_minus[1:],
         "penetration": pen, "closure": closure, "sign_changes": changes,
         "y_release": y_release}, traj
 
