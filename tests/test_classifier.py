@@ -57,7 +57,7 @@ def _locked(n_cycles=40, lag=0.03):
 
 
 def test_regime_features_are_an_explicit_set_importing_registers_nothing():
-    assert list(ALL_FEATURES) == [*ANALYSIS_FEATURES, *REGIME_FEATURES]
+    assert list(ALL_FEATURES) == [*ANALYSIS_FEATURES, *REGIME_FEATURES, *STATE_FEATURES]
     assert not set(REGIME_FEATURES) & set(ANALYSIS_FEATURES)
     assert list(compute_features(_ctx(*_locked()))) == list(ANALYSIS_FEATURES)
 
@@ -380,16 +380,17 @@ def test_default_model_on_fresh_held_out_set(default_model):
 
 def test_shipped_model_comes_out_of_its_own_training_command(default_model):
     """`train --seed` reproduces the shipped model: the training rows it keeps (paper
-    rig, other rigs and compliant walls, corpus recordings with the pulse learned) are
-    recomputed and must match. A failure means the simulator, the sensor model or the
-    analysis changed the training set: retrain with the command in the model's
-    metadata and ship the new model (its bench_regimes report with it)."""
+    rig, other rigs and compliant walls, corpus and corpus-drawn recordings with the pulse
+    learned) are recomputed and must match. A failure means the simulator, the sensor
+    model or the analysis changed the training set: retrain with the command in the
+    model's metadata and ship the new model (its bench_regimes report with it)."""
     import math
 
     from vidiscover.regimes.dataset import reproduce_row
 
     probes = default_model.metadata.get("probe", [])
-    assert {p["origin"] for p in probes} == {"random", "realism", "corpus_dev"}, \
+    # the command's --n-corpus-train 192: the corpus dev split's 96 and 96 drawn from --seed
+    assert {p["origin"] for p in probes} == {"random", "realism", "corpus_dev", "corpus_draw"}, \
         "the shipped model keeps no training rows: retrain it"
     assert len(probes) >= 12
     for p in probes:
@@ -405,11 +406,11 @@ def test_shipped_model_comes_out_of_its_own_training_command(default_model):
 
 
 #: The issue's targets are 0.95 and every recall >= 0.9, every label (none exempt).
-#: Not met on this set: ``classify`` measures 0.945 and ``1ipc`` 12 of 17 (0.706):
+#: Not met on this set: ``classify`` measures 0.948 and ``1ipc`` 12 of 17 (0.706):
 #: grazing one-impact-per-cycle rigs whose impacts the detector does not see (3, called
 #: no_impact) or sees in 5-28 % of the cycles (2, called chaotic); the rules fail the
 #: same 5. The floors guard what is achieved (a regression fails); the misses are
-#: reported in the README and the notes. Every other label measures >= 0.96. (With 10
+#: reported in the README and the notes. Every other label measures >= 0.965. (With 10
 #: wanted cases per label instead of 12, 369 cases, 1ipc is 6 of 11: the grazing
 #: one-impact rigs are the weak spot whatever the draw.)
 RECALL_FLOOR = {lab: 0.9 for lab in LABELS} | {"1ipc": 0.70}
@@ -420,7 +421,7 @@ BALANCED_FLOOR = 0.94
 def test_default_model_on_the_issue_targets(default_model):
     """Held-out rigs the model never saw: 250 at the paper's rig and 100 other rigs and
     instrument chains (pulse known), with targeted draws so that every label has >= 12
-    cases (381 in all); every label counts. And the independent simulator's recordings
+    cases (375 in all); every label counts. And the independent simulator's recordings
     (pulse learned, as a user's): every one labelled right."""
     import independent
 

@@ -35,7 +35,16 @@ if TYPE_CHECKING:      # pandas is imported where a table is built, not to analy
     import pandas as pd
 
 __all__ = ["ReturnMap", "return_map", "FeatureContext", "FeatureSet", "ANALYSIS_FEATURES",
-           "compute_features"]
+           "compute_features", "EDGE_MARGIN"]
+
+#: Cycle starts closer than this (s) to either end of the reconstructed LO motion are
+#: not used by the features that read x at or between cycle starts
+#: (:meth:`FeatureContext.motion_cycles`): there the drift smoother of
+#: :func:`~vidiscover.analysis.reconstruction.reconstruct` (``drift_window`` 0.1 s, as
+#: :func:`~vidiscover.analysis.analyze` calls it) fits one-sided and x is off (realism
+#: corpus test-051: by 0.39 of max |x| at the last sample, 0.26 at the first). Half
+#: that window. :meth:`FeatureContext.amplitude` (max |x|) leaves those samples out too.
+EDGE_MARGIN = 0.05
 
 
 @dataclass(frozen=True, eq=False)
@@ -206,6 +215,15 @@ class FeatureContext:
         """Impacts per complete cycle."""
         return self._counts
 
+    def motion_cycles(self) -> np.ndarray:
+        """The cycle starts at least :data:`EDGE_MARGIN` inside the finite LO motion.
+
+        What the features that read x at or between cycle starts use: consecutive
+        starts of :meth:`cycles`, so they bound complete cycles, none of them reaching
+        into the reconstruction's ends (empty without a finite sample).
+        """
+        return self._motion_cycles
+
     def finite_motion(self) -> tuple[np.ndarray, np.ndarray]:
         """(ts, x) at the samples where x is finite.
 
@@ -236,15 +254,37 @@ class FeatureContext:
         return {}
 
     def amplitude(self) -> float:
-        """The largest |x| over the finite samples (NaN without any)."""
-        _, xf = self.finite_motion()
-        return max(float(xf.max()), -float(xf.min())) if xf.size else _NAN
+        """The largest |x| over the finite samples (NaN without any).
+
+        Over those at least :data:`EDGE_MARGIN` inside the record's ends, where x is
+        off (all of them when none is).
+        """
+        return self._amplitude
+
+    @functools.cached_property
+    def _amplitude(self) -> float:
+        ts, xf = self.finite_motion()
+        if not xf.size:
+            return _NAN
+        lo = np.searchsorted(ts, ts[0] + EDGE_MARGIN, side="left")
+        hi = np.searchsorted(ts, ts[-1] - EDGE_MARGIN, side="right")
+        x = xf[lo:hi] if hi > lo else xf
+        return max(float(x.max()), -float(x.min()))
 
     @functools.cached_property
     def _cycles(self) -> np.ndarray:
         c = self.forcing.cycle_starts(self.t_start, self.t_end)
         c.flags.writeable = False
         return c
+
+    @functools.cached_property
+    def _motion_cycles(self) -> np.ndarray:
+        c = self._cycles
+        ts, _ = self.finite_motion()
+        out = (c[(c >= ts[0] + EDGE_MARGIN) & (c <= ts[-1] - EDGE_MARGIN)] if ts.size
+               else c[:0].copy())
+        out.flags.writeable = False
+        return out
 
     @functools.cached_property
     def _counts(self) -> np.ndarray:
@@ -436,8 +476,12 @@ def _dv_cv(ctx: FeatureContext) -> float:
 
 
 def _cycle_amplitudes(ctx: FeatureContext) -> np.ndarray:
-    """Half peak-to-peak of the finite LO displacement in each complete cycle."""
-    c = ctx.cycles()
+    """Half peak-to-peak of the finite LO displacement in each complete cycle.
+
+    Over the cycles of :meth:`FeatureContext.motion_cycles` (away from the
+    reconstruction's ends).
+    """
+    c = ctx.motion_cycles()
     if c.size < 2 or ctx.x.size == 0:
         return np.zeros(0)
     all_finite = ctx.finite_motion()[1] is ctx.x
@@ -474,9 +518,10 @@ def _strobe(ctx: FeatureContext) -> float:
     """Periodicity error of the stroboscopic LO displacement (~0 when periodic).
 
     Min over p <= 4 of the largest change over p cycles (last half of the record),
-    relative to max |x|.
+    relative to max |x|, at the cycle starts of :meth:`FeatureContext.motion_cycles`
+    (none within :data:`EDGE_MARGIN` of the reconstruction's ends, where x is off).
     """
-    c = ctx.cycles()
+    c = ctx.motion_cycles()
     ts, xf = ctx.finite_motion()
     if c.size < 6 or xf.size == 0:
         return _NAN

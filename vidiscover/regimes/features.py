@@ -17,9 +17,9 @@ float, NaN when undefined for the record.
   ``returnmap_cluster_density`` (clusters per point);
 * LO response: ``waveform_period_error`` (the displacement over a cycle repeats
   after p <= 4 cycles), ``waveform_period`` (that p, 0 if none), ``strobe_dispersion``
-  (spread of the stroboscopic section), ``envelope_cv``; apart, in
-  :data:`STATE_FEATURES`, ``strobe_state_error`` (the labels' periodicity test on
-  the stroboscopic LO state, x and x');
+  (spread of the stroboscopic section), ``envelope_cv``; in :data:`STATE_FEATURES`
+  (part of :data:`ALL_FEATURES`), ``strobe_state_error`` (the labels' periodicity
+  test on the stroboscopic LO state, x and x');
 * strengths: ``dv_side_ratio`` (|log| of the mean pulse ratio right/left).
 
 Examples
@@ -159,6 +159,10 @@ def _dv_ratio(ctx: FeatureContext) -> float:
 def cycle_waveforms(ctx: FeatureContext, points: int = _WAVE_POINTS) -> np.ndarray:
     """LO displacement over each complete cycle, resampled at ``points`` phases.
 
+    The cycles between the starts of
+    :meth:`~vidiscover.analysis.returnmap.FeatureContext.motion_cycles`: none reaches
+    into the reconstruction's ends, where x is off.
+
     Parameters
     ----------
     ctx : FeatureContext
@@ -175,7 +179,7 @@ def cycle_waveforms(ctx: FeatureContext, points: int = _WAVE_POINTS) -> np.ndarr
 
 
 def _cycle_waveforms(ctx: FeatureContext, points: int) -> np.ndarray:
-    c = ctx.cycles()
+    c = ctx.motion_cycles()
     ts, xf = ctx.finite_motion()
     if c.size < 2 or xf.size < 2:
         return np.zeros((0, points))
@@ -282,12 +286,14 @@ def _strobe_state(ctx: FeatureContext) -> float:
     """Periodicity error of the stroboscopic LO state (x, x'), as the labels test it.
 
     Min over p <= 4 of the larger of the largest changes over p cycles of x and of
-    x' at the cycle starts (last half of the record), each relative to its largest
-    magnitude over the record (max |x|, max |x'|; x' from :func:`_lo_velocity`).
+    x' at the cycle starts (last half of the record; those of
+    :meth:`~vidiscover.analysis.returnmap.FeatureContext.motion_cycles` where x' is
+    known), each relative to its largest magnitude over the record (max |x|, max |x'|;
+    x' from :func:`_lo_velocity`).
     ``strobe_period_error`` reads x alone: a weakly irregular motion whose x repeats
     to within 1 % while x' does not is periodic to it and chaotic to the labels.
     """
-    c = ctx.cycles()
+    c = ctx.motion_cycles()
     ts, xf = ctx.finite_motion()
     tv, v = _lo_velocity(ctx)
     amp = ctx.amplitude()
@@ -340,15 +346,15 @@ REGIME_FEATURES = FeatureSet({
     "envelope_cv": _env_cv,
 })
 
-#: ``strobe_state_error`` (the labels' periodicity test on x and x'), not in
-#: :data:`ALL_FEATURES`: a model trained with it (``train --seed 0``, the shipped
-#: command) called other rigs' chaotic cases right (held out, seed 777: 0.96 vs 0.86)
-#: but lost the realism corpus with learned pulse (balanced 0.936 vs 0.957), so the
-#: shipped model does without it. With 96 more learned-pulse rows as well
-#: (``--n-corpus-train 192``) it won every tuning set but still lost that corpus
-#: (0.936: 91 of 96 right vs 93). Add it with ``ALL_FEATURES | STATE_FEATURES``.
+#: ``strobe_state_error`` (the labels' periodicity test on x and x'), a set of its own
+#: (the rule baseline reads x alone, ``strobe_period_error``) and part of
+#: :data:`ALL_FEATURES`: other rigs' chaotic motions often repeat within 1 % in x
+#: and not in x', and a model that reads x alone calls them ``multi_ipc`` (with the
+#: end-of-record fix and ``--n-corpus-train 192``, other rigs' ``chaotic`` recall on
+#: tuning seeds 555 / 100003: 0.875 -> 0.911 / 0.761 -> 0.913).
 STATE_FEATURES = FeatureSet({"strobe_state_error": _strobe_state})
 
-#: The analysis's own features and the regime features: the set the classifier, sweeps
-#: and the ``analyze`` command compute (``analyze(rec, features=ALL_FEATURES)``).
-ALL_FEATURES = ANALYSIS_FEATURES | REGIME_FEATURES
+#: The analysis's own features, the regime features and the state's periodicity: the
+#: set the classifier, sweeps and the ``analyze`` command compute
+#: (``analyze(rec, features=ALL_FEATURES)``).
+ALL_FEATURES = ANALYSIS_FEATURES | REGIME_FEATURES | STATE_FEATURES
