@@ -46,6 +46,40 @@ def test_map_keeps_input_order_and_shares_the_tasks():
     assert bar.n == len(items)
 
 
+def _touch(path: str) -> bool:
+    with open(path, "a"):
+        pass
+    return os.getpid() == PARENT
+
+
+@forking
+def test_first_runs_here_once_while_the_workers_take_the_tasks(tmp_path):
+    """``first`` (e.g. the next stage's imports) runs here before this process takes a
+    task, and the workers work meanwhile: a task's mark appears while it runs."""
+    marks = [str(tmp_path / f"{i}") for i in range(4)]
+    seen = []
+
+    def first():
+        deadline = time.monotonic() + 10.0
+        while not os.path.exists(marks[0]) and time.monotonic() < deadline:
+            time.sleep(0.005)
+        seen.append(os.path.exists(marks[0]))
+
+    with WorkerPool(1) as pool:
+        here = pool.map(_touch, marks, first=first)
+    assert seen == [True]                 # run once, and a worker did a task meanwhile
+    assert here[0] is False               # the first task was the worker's
+    assert all(os.path.exists(m) for m in marks)
+
+
+def test_first_runs_once_also_without_workers():
+    calls = []
+    with WorkerPool(0) as pool:
+        assert pool.map(math.sqrt, [], first=lambda: calls.append(1)) == []
+        assert pool.map(math.sqrt, [4.0], first=lambda: calls.append(2)) == [2.0]
+    assert calls == [1, 2]
+
+
 @forking
 def test_map_raises_a_task_error_after_the_running_tasks():
     with WorkerPool(1) as pool:

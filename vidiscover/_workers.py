@@ -160,7 +160,7 @@ class WorkerPool:
         except BrokenProcessPool:        # the worker died (e.g. out of memory): redo it here
             return func(*args)
 
-    def map(self, func, items, *, cost=None, bar=None) -> list:
+    def map(self, func, items, *, cost=None, bar=None, first=None) -> list:
         """``[func(i) for i in items]``, shared with the workers.
 
         Parameters
@@ -172,6 +172,10 @@ class WorkerPool:
             ``cost(item)``: a task's relative cost; the costliest are started first.
         bar : tqdm, optional
             Advanced by one per finished task.
+        first : callable, optional
+            Run here once before this process takes a task, while the workers start on
+            the queue (e.g. the imports of the next stage, which these tasks do not
+            need). Run whatever the number of workers.
         """
         import threading
         from collections import deque
@@ -187,6 +191,8 @@ class WorkerPool:
                     bar.update(1)
 
         if self.executor is None or len(items) <= 1:
+            if first is not None:
+                first()
             for i, item in enumerate(items):
                 finished(i, func(item))
             return out
@@ -229,6 +235,8 @@ class WorkerPool:
         for t in threads:
             t.start()
         try:
+            if first is not None:
+                first()
             while (i := take()) is not None:
                 finished(i, func(items[i]))
         finally:

@@ -266,25 +266,34 @@ def _instrument_of(analysis: AnalysisResult):
 
 
 # --------------------------------------------------------------------- processes
-def _workers_for(n_jobs: int | None, width: int) -> WorkerPool:
+def _workers_for(n_jobs: int | None, width: int, *, fitting: bool) -> WorkerPool:
     """Forked workers for a discovery's independent tasks (:class:`WorkerPool`).
 
     ``width - 1`` workers (``width``: the most tasks at once, this process running
     one), at most ``2 n_jobs - 1``, so that e.g. three analyses on two cores run side
     by side (1.5 analyses long, not two in a row). ``n_jobs == 1``, or no fork (not
-    Linux, or inside a daemonic worker), runs everything here.
+    Linux, or inside a daemonic worker), runs everything here. ``fitting``: the
+    tasks fit laws, so the fitting libraries (:func:`_fitting_imports`) are loaded
+    before the fork, once for every worker.
     """
     cores = n_workers(n_jobs)
     workers = min(width - 1, 2 * cores - 1)
     if cores > 1 and workers >= 1 and can_fork():
-        # what every task needs, imported once before the workers fork
-        import pysindy  # noqa: F401
-        import scipy.optimize  # noqa: F401
-        import scipy.special  # noqa: F401
-
+        if fitting:
+            _fitting_imports()
         # forked now, before this process starts a thread of its own (the bar's)
         return WorkerPool(workers)
     return WorkerPool(0)
+
+
+def _fitting_imports() -> None:
+    """Load what the flight and impact laws need and the analyses do not.
+
+    About 1 s: pysindy brings scikit-learn and scipy.stats.
+    """
+    import pysindy  # noqa: F401
+    import scipy.optimize  # noqa: F401
+    import scipy.special  # noqa: F401
 
 
 def _analysis_task(task: tuple) -> AnalysisResult:
@@ -409,24 +418,33 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
     kws = {"seed": int(seed), "n_boot": int(n_boot), "level": float(level),
            "criterion": criterion, "terms": terms, "min_effect": min_effect,
            **dict(impact_kws or {})}
-    # the analyses side by side; then the flight law here while workers fit the impact
-    # laws on the same analyses (used unless the flight law sends them to be redone)
-    run = _workers_for(n_jobs, max(len(items), 1 + len(SIDES)))   # forks here
+    # the analyses side by side, in workers forked before the fitting libraries are
+    # loaded: this process loads them meanwhile (the analyses do not need them), then
+    # takes an analysis too; then the flight law here while workers forked with those
+    # libraries fit the impact laws on the same analyses (used unless the flight law
+    # sends them to be redone)
+    todo = [k for k, it in enumerate(items) if not isinstance(it, AnalysisResult)]
     bar = None
     try:
-        if progress:
-            from tqdm import tqdm
+        with _workers_for(n_jobs, len(todo), fitting=False) as analysts:   # forks here
+            if progress:
+                from tqdm import tqdm
 
-            bar = tqdm(total=len(items), desc="analyse", unit="rec")
-        todo = [k for k, it in enumerate(items) if not isinstance(it, AnalysisResult)]
-        done = run.map(_analysis_task, [(items[k], mu, detection, meta) for k in todo],
-                       bar=bar)
+                bar = tqdm(total=len(items), desc="analyse", unit="rec")
+            done = analysts.map(_analysis_task,
+                                [(items[k], mu, detection, meta) for k in todo],
+                                bar=bar, first=_fitting_imports)
         analyses = list(items)
         for k, a in zip(todo, done, strict=True):
             analyses[k] = a
         if bar is not None:
             bar.update(len(items) - len(todo))
+            bar.close()           # stops its monitor thread: the next pool forks
+    finally:
+        if bar is not None:
             bar.close()
+    run = _workers_for(n_jobs, 1 + len(SIDES), fitting=True)   # forks here
+    try:
         analyses = tuple(analyses)
         data = {side: _pool(analyses, side) for side in SIDES}
         ahead = {side: run.submit(_impact_law, data[side], kws) for side in SIDES} \
@@ -469,8 +487,6 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
                 warnings.append(f"{side} wall: {laws[side].note}")
     finally:
         run.close()
-        if bar is not None:
-            bar.close()
     return DiscoveryResult(recordings=tuple(a.name for a in analyses), analyses=analyses,
                            impact_data=data, impact_laws=laws, flight=flight_result,
                            mu=float(mu), mu_impacts=mu_impacts, theta_impacts=theta_impacts,
