@@ -18,6 +18,7 @@ import numpy as np
 from ..errors import InputError
 from ..params import G_ACCEL
 from .friction import solve_flights
+from .reconstruction import contact_durations
 
 __all__ = ["FlightData", "STEPS", "reconstruct_flights", "solve_free_flights"]
 
@@ -69,13 +70,7 @@ class FlightData:
         self.u_plus = (np.asarray(imp["u_plus"], float) if "u_plus" in imp
                        else np.full(n_imp, np.nan))
         # contact duration (s) per impact: the learned pulse's, per wall
-        resp = getattr(det, "response", None)
-        if resp is not None:
-            taus = (float(resp.model_for(1).tau), float(resp.model_for(-1).tau))
-        else:
-            tau = float(getattr(getattr(det, "pulse", None), "tau", 0.0) or 0.0)
-            taus = (tau, tau)
-        self.tau = np.where(self.sign > 0, taus[0], taus[1])
+        self.tau = contact_durations(det)
         self.reliable = np.asarray(det.columns["reliable"], bool)
         self.i_s = np.asarray(fl["i_start"], np.int64)
         self.i_e = np.asarray(fl["i_end"], np.int64)
