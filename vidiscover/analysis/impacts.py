@@ -403,6 +403,12 @@ def detect_impacts(rec, options: DetectionOptions | None = None, *, pulse=None,
         y = _add_loads(af - fit.render(), loads, -1.0)
         return _add_loads(savgol_smooth(smoother_input(prev, y), win), loads, 1.0)
 
+    def error_bridged():
+        # the fitted pulses' peaks, and which of them have a learned model error beyond
+        # the main lobe above _BRIDGE_ERROR noise sigmas (bridged for the smoother)
+        peak = np.abs(fit.amp) * fit.side_value(fit.peaks)
+        return peak, peak * error_env.max() > _BRIDGE_ERROR * sigma
+
     def smoother_input(prev=None, sm=None):
         # the smooth part with the main lobes of the fitted pulses bridged: what the
         # pulse model misses there would leak into the smooth part and come back as
@@ -423,10 +429,9 @@ def detect_impacts(rec, options: DetectionOptions | None = None, *, pulse=None,
                 # bridged too: it leaked into the smooth part and came back as false
                 # pulses at the smoother's half window (test-055: 15, 3 ms after
                 # impacts of SNR 3600)
-                big = np.abs(fit.amp) * fit.side_value(fit.peaks) * error_env.max() > (
-                    _BRIDGE_ERROR * sigma)
+                peak, big = error_bridged()
                 if big.any():
-                    peak = np.abs(fit.amp[big]) * fit.side_value(fit.peaks)[big]
+                    peak = peak[big]
                     over = peak[:, None] * error_env[None, :] > _BRIDGE_ERROR * sigma
                     off = np.where(fit.amp[big] >= 0, peak_at[0], peak_at[1])
                     r, k = np.nonzero(over)
@@ -468,8 +473,7 @@ def detect_impacts(rec, options: DetectionOptions | None = None, *, pulse=None,
         fit.backfit(base, iterations=1)
         base = savgol_smooth(smoother_input(), win)
         fit.backfit(base, iterations=1)
-        if error_lags.size and np.any(np.abs(fit.amp) * fit.side_value(fit.peaks)
-                                      * error_env.max() > _BRIDGE_ERROR * sigma):
+        if error_lags.size and error_bridged()[1].any():
             # strong pulses' model error beyond their main lobes: bridged from now on
             # (about the smooth part just made, see smoother_input)
             for _ in range(_BRIDGE_PASSES):

@@ -336,7 +336,7 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
         return np.interp(tq - t[0], tr, x_f)
 
     exits = _exits(det, t_imp, side, x_imp, v_plus, b, lo_x, lo_velocity)
-    flights, traj = _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f,
+    flights, traj = _flights(t_imp, side, x_imp, y_imp, v_minus, b, mu, t, x_f,
                              det.baseline, fs, stick_tol, lo_x, lo_acc, lo_velocity, exits)
     del lo_velocity, lo_acc, lo_x
     tr = None                        # (dropped before the laser derivative)
@@ -501,9 +501,9 @@ def refly(recon: Reconstruction, det: ImpactDetection, mu: float, *,
     ic = recon.impact_columns
     side = det.sign.astype(float)
     exits = _exits(det, det.t, side, ic["x"], ic["v_plus"], b, lo_x, lo_velocity)
-    flights, traj = _flights(det.t, side, ic["x"], ic["y"], ic["v_minus"], ic["v_plus"], b,
-                             float(mu), t, recon.x, det.baseline, fs, stick_tol, lo_x,
-                             lo_acc, lo_velocity, exits)
+    flights, traj = _flights(det.t, side, ic["x"], ic["y"], ic["v_minus"], b, float(mu), t,
+                             recon.x, det.baseline, fs, stick_tol, lo_x, lo_acc, lo_velocity,
+                             exits)
     impacts = _impact_columns(det.t, det.side, ic["x"], ic["y"], ic["v_minus"],
                               ic["v_plus"], dv, flights, exits[3])
     return Reconstruction(t=t, x=recon.x, v=v, v_disp=recon.v_disp, impact_columns=impacts,
@@ -557,11 +557,9 @@ def contact_durations(det: ImpactDetection) -> np.ndarray:
 def _exits(det, t_imp, side, x_imp, v_plus, b, lo_x, lo_velocity):
     """``(t, x, y, v)`` at each contact's exit: time, LO and ball positions, LO velocity.
 
-    See the module docs.
-
     ``t + tau`` (:func:`contact_durations`), at most half-way to the next impact; the
     impact's own states where ``tau`` is 0 (so rigid walls give the instantaneous
-    impact exactly).
+    impact exactly). See the module docs.
     """
     tau = contact_durations(det)
     if not np.any(tau > 0):
@@ -613,8 +611,8 @@ def _first_where(cond, starts: np.ndarray, ends: np.ndarray, part: int = _PART) 
     return found
 
 
-def _flights(t_imp, side, x_imp, y_imp, v_minus, v_plus, b, mu, t, x_f, acc, fs,
-             stick_tol, lo_x, lo_acc, lo_velocity, exits):
+def _flights(t_imp, side, x_imp, y_imp, v_minus, b, mu, t, x_f, acc, fs, stick_tol, lo_x,
+             lo_acc, lo_velocity, exits):
     """Flight table between consecutive contacts, each from an exit to the next entry.
 
     ``exits``: ``(t, x, y, v)`` at each contact's exit (:func:`_exits`).

@@ -439,10 +439,9 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
             analyses[k] = a
         if bar is not None:
             bar.update(len(items) - len(todo))
-            bar.close()           # stops its monitor thread: the next pool forks
     finally:
         if bar is not None:
-            bar.close()
+            bar.close()           # stops its monitor thread: the next pool forks
     run = _workers_for(n_jobs, 1 + len(SIDES), fitting=True)   # forks here
     try:
         analyses = tuple(analyses)
