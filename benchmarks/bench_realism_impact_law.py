@@ -26,7 +26,7 @@ law so that the impact law is scored on its own:
   (fastest / slowest impact: below about 1.15 a falling r and a constant one fit the
   same data, and the law reports the constant).
 
-Figures are quoted on the ``holdout`` split (see :mod:`vidiscover.corpus`);
+Figures are quoted on the ``holdout2`` split (see :mod:`vidiscover.corpus`);
 ``--split dev`` is for tuning. A case whose simulation or analysis fails is listed,
 not dropped.
 
@@ -38,7 +38,7 @@ the sensors or the analysis change.
 
 Usage::
 
-    python benchmarks/bench_realism_impact_law.py [--split holdout] [--n 60] [--n-boot 200]
+    python benchmarks/bench_realism_impact_law.py [--split holdout2] [--n 60] [--n-boot 200]
         [--cache DIR]
 """
 
@@ -172,7 +172,7 @@ def score_hunt_crossley(case, n_boot: int, tables: dict) -> list[dict]:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout2", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--n-boot", type=int, default=200,

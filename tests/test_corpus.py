@@ -10,10 +10,12 @@ from vidiscover.errors import InputError
 def test_cases_are_a_pure_function_of_split_and_index():
     assert realism_case("dev", 3) == realism_case("dev", 3)
     assert realism_case("dev", 3) != realism_case("dev", 4)
-    dev = {c.params for c in realism_corpus("dev", 8)}
-    test = {c.params for c in realism_corpus("test", 8)}
-    holdout = {c.params for c in realism_corpus("holdout", 8)}
-    assert not dev & test and not dev & holdout and not test & holdout
+    splits = [{c.params for c in realism_corpus(name, 8)}
+              for name in ("dev", "test", "holdout", "holdout2")]
+    for i, one in enumerate(splits):
+        assert len(one) == 8
+        for other in splits[i + 1:]:
+            assert not one & other
 
 
 def test_draws_stay_in_their_ranges(realism_dev):
