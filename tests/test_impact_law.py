@@ -599,6 +599,34 @@ def test_r_above_one_is_flagged():
                                n_boot=0).warning is None
 
 
+def test_single_speed_wall_above_one_is_constrained_or_not_identified():
+    """A single-speed wall (one speed cluster) whose constant r comes out above 1
+    (realism holdout-022 right: 1.066, standard errors 0.058, reported kind
+    "generic"): within 2 standard errors of 1 the constrained estimate r = 1 is
+    reported (kind constant, interval [r0 - 2 s, 1], a note that says r is not
+    identified beyond that); beyond them, r is not identified and the note says why.
+    Below 1 nothing changes."""
+    rng = np.random.default_rng(22)
+    v = 0.5 * (1.0 + rng.uniform(-0.01, 0.01, 40))
+    r = 1.066 + rng.normal(0.0, 0.003, v.size)
+    near = discover_impact_law(v, r, sigma=np.full(v.size, 0.058), n_boot=50)
+    assert near.kind == "constant" and near.coefficients == {"1": 1.0}
+    assert near.law is not None and near.law.r0 == 1.0
+    lo, hi = near.ci["1"]
+    assert hi == 1.0 and abs(lo - (np.mean(r) - 2 * 0.058)) < 1e-3
+    assert np.all(near.boot_coefficients <= 1.0) and near.predict([0.5])[0] == 1.0
+    assert "constrained estimate r = 1" in near.note and "no further than" in near.note
+    far = discover_impact_law(v, r, sigma=np.full(v.size, 0.01), n_boot=50)
+    assert far.kind == "undetermined" and far.terms == () and far.law is None
+    assert far.formula.startswith("r not identified")
+    assert "by more than 2 standard errors (0.01)" in far.note
+    assert np.isnan(far.predict([0.5])[0])
+    assert far.to_dict()["kind"] == "undetermined"
+    below = discover_impact_law(v, r - 0.1, sigma=np.full(v.size, 0.058), n_boot=0)
+    assert below.kind == "constant" and abs(below.coefficients["1"] - (np.mean(r) - 0.1)) < 1e-3
+    assert below.note is None
+
+
 #: Hunt-Crossley walls of the realism test split (pooled over two clearances) and the
 #: RMS error of their prediction at the third clearance (<= 1.4 x the pooled speeds)
 #: with one standard error per speed cluster (measured 0.0271, 0.0276, 0.0219, 0.0066).

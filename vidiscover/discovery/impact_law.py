@@ -120,7 +120,7 @@ from __future__ import annotations
 import functools
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 
@@ -1103,7 +1103,7 @@ def discover_impact_law(v, r, *, seed: int = 0, n_boot: int = 200, groups=None,
     order_f = np.argsort(-picks, kind="stable")
     sel_freq = {cands[i].name: float(freq[i]) for i in order_f if picks[i] > 0}
     fitted = design.predict(chosen, coef, v)
-    return ImpactLawResult(
+    return _constrained(ImpactLawResult(
         formula=formula, kind=kind, law=law, terms=chosen.r_terms,
         coefficients={t: float(c) for t, c in zip(chosen.r_terms, coef, strict=True)},
         ci={t: (float(ci[0, j]), float(ci[1, j])) for j, t in enumerate(chosen.r_terms)},
@@ -1119,7 +1119,7 @@ def discover_impact_law(v, r, *, seed: int = 0, n_boot: int = 200, groups=None,
         boot_coefficients=boot,
         effect=float(effects[best]),
         effect_threshold=float(threshold), precision=float(precision), note=why,
-        valid_range=(0.0, v_hi))
+        valid_range=(0.0, v_hi)), sig)
 
 
 def _f_test(design: _Design, r: np.ndarray, alt: _Candidate, rss0: float,
@@ -1415,7 +1415,7 @@ def _fallback(v: np.ndarray, r: np.ndarray, sw: np.ndarray, *, n_dropped: int,
         law = None
     table = pd.DataFrame([["r ~ 1", 1, rss, _aicc(rss, n, 1), 0.0, math.nan, 0.0,
                            bool(0.0 < r0 <= R_MAX), "nested", True, math.nan]], columns=columns)
-    return ImpactLawResult(
+    return _constrained(ImpactLawResult(
         formula=law.formula if law else _generic_formula((CONSTANT_TERM,), [r0]),
         kind="constant" if law else "generic", law=law, terms=(CONSTANT_TERM,),
         coefficients={CONSTANT_TERM: r0}, ci={CONSTANT_TERM: (float(ci[0, 0]), float(ci[1, 0]))},
@@ -1430,4 +1430,53 @@ def _fallback(v: np.ndarray, r: np.ndarray, sw: np.ndarray, *, n_dropped: int,
                                       _above_one(np.array([r0]), sig, precision)) if w),
         boot_coefficients=boot, effect=0.0,
         effect_threshold=_effect_threshold(min_effect, precision, end_error),
-        precision=precision, valid_range=(0.0, CLAIMED_BEYOND * float(v.max())))
+        precision=precision, valid_range=(0.0, CLAIMED_BEYOND * float(v.max()))), sig)
+
+
+def _constrained(res: ImpactLawResult, sig: np.ndarray | None) -> ImpactLawResult:
+    """A constant r above 1: the constrained estimate r = 1, or "not identified".
+
+    A passive wall returns at most the energy it receives, so ``r <= 1``. When the
+    reported law is a constant ``r0 > 1`` (the weighted mean of the estimates), it is
+    compared with :data:`_ABOVE_ONE` standard errors ``s`` of an r estimate (their
+    median ``sigma``, or the scatter about the mean without it: what repeats from
+    impact to impact, as at a single speed, does not average out):
+
+    * ``r0 <= 1 + 2 s``: the maximum-likelihood estimate under ``r <= 1`` is
+      ``r = 1`` (kind ``"constant"``); its interval is ``[r0 - 2 s, 1]``, the
+      admissible values within the errors. The note says that the data do not
+      identify r beyond that (a near-elastic wall or biased estimates).
+    * beyond: no admissible r is consistent with the estimates, which are then
+      biased (missed or merged impacts, the flight law, the pulse model): kind
+      ``"undetermined"``, formula ``"r not identified (...)"``, no coefficients, and
+      the note says why.
+
+    Any other result is returned unchanged.
+    """
+    if res.terms != (CONSTANT_TERM,) or not res.coefficients[CONSTANT_TERM] > 1.0:
+        return res
+    r0 = float(res.coefficients[CONSTANT_TERM])
+    s = max(float(np.median(sig)) if sig is not None and sig.size else float(res.precision),
+            0.0)
+    where = (f"the weighted mean of the r estimates, {r0:.4g}, is above 1, which a passive "
+             "wall cannot return")
+    if r0 <= 1.0 + _ABOVE_ONE * s:
+        lo = max(r0 - _ABOVE_ONE * s, 0.0)
+        note = (f"{where}, but within {_ABOVE_ONE:g} standard errors ({s:.2g}) of an r "
+                f"estimate of 1: the constrained estimate r = 1 is reported, and the data "
+                f"identify r no further than {lo:.3g} <= r <= 1 (a near-elastic wall, or "
+                "estimates biased upward by up to that much)")
+        law = RestitutionLaw.constant(1.0)
+        return replace(res, formula=law.formula, kind="constant", law=law,
+                       coefficients={CONSTANT_TERM: 1.0}, ci={CONSTANT_TERM: (lo, 1.0)},
+                       boot_coefficients=np.minimum(res.boot_coefficients, 1.0),
+                       note=note if res.note is None else res.note + "; " + note)
+    note = (f"{where}, by more than {_ABOVE_ONE:g} standard errors ({s:.2g}) of an r "
+            "estimate: no admissible constant r is consistent with the estimates, which "
+            "are biased (missed or merged impacts, the flight law, the pulse model); r is "
+            "not identified")
+    return replace(res, formula=f"r not identified (estimates at {r0:.4g}, above 1)",
+                   kind="undetermined", law=None, terms=(), coefficients={}, ci={},
+                   boot_coefficients=np.empty((res.boot_coefficients.shape[0], 0)),
+                   note=note if res.note is None else res.note + "; " + note,
+                   valid_range=(math.nan, math.nan), effect=math.nan)
