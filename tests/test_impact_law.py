@@ -815,3 +815,18 @@ def test_change_error_scales_down_to_the_floor_only():
     lab = np.repeat(np.arange(4), 20)
     loose = _change_error(v, sig, np.array([0.05, -0.04, 0.06, -0.05])[lab], 2)
     assert loose >= plain
+
+
+def test_law_above_one_at_rest_is_not_admissible():
+    """r = 1.08 - 0.5 v^2 over three speed clusters (realism test-022, a Hunt-Crossley
+    wall whose cluster estimates are biased by +-0.04, was reported ``1.086 - 0.586
+    v^2``): r = 1.08 at rest, which no passive wall returns, beyond 2 standard errors
+    (0.004) of an r estimate. The law reported stays at or below 1 + 2 s from rest to
+    the fastest impact, and the note says why the best fit was not taken."""
+    rng = np.random.default_rng(7)
+    v = np.concatenate([c * (1 + rng.uniform(-0.01, 0.01, 40)) for c in (0.55, 0.7, 0.82)])
+    r = 1.08 - 0.5 * v ** 2 + rng.normal(0, 0.002, v.size)
+    law = discover_impact_law(v, r, sigma=np.full(v.size, 0.004), n_boot=0)
+    assert law.velocity_dependent, law.formula
+    assert np.nanmax(law.predict(np.linspace(0.0, v.max(), 50))) <= 1.008 + 1e-12
+    assert "outside the admissible 0 < r <= 1.008" in law.note
