@@ -447,3 +447,45 @@ def test_analysis_and_pulse_learning_do_not_import_scipy_signal():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True).stdout.strip()
     assert out == "[]"
+
+
+def _with_reimpacts(kind, seed=3, fs=2560.0, os=16, lag=6.75e-3, ratio=0.3):
+    """Impacts on alternate walls, each followed ``lag`` later by a re-impact on its wall
+    of ``ratio`` times its impulse (a periodic motion: every learning window holds one)."""
+    fo = fs * os
+    rng = np.random.default_rng(seed)
+    to = np.arange(int(3.0 * fs) * os) / fo
+    a = -20.0 * np.sin(2 * np.pi * 9.0 * to)
+    t_main = np.arange(0.05, 2.9, 0.0366) + rng.uniform(-0.002, 0.002, 78)
+    dv_main = np.where(np.arange(78) % 2 == 0, 1.0, -1.0) * rng.uniform(0.015, 0.02, 78)
+    order = np.argsort(np.r_[t_main, t_main + lag])
+    t_in = np.r_[t_main, t_main + lag][order]
+    dv = np.r_[dv_main, ratio * dv_main][order]
+    tau = 0.1e-3
+    m = int(round(tau * fo))
+    for ti, d in zip(t_in, dv):
+        k = int(np.ceil(ti * fo))
+        a[k:k + m] += d * np.pi / (2 * tau) * np.sin(np.pi * (np.arange(k, k + m) / fo - ti) / tau)
+    sos = (signal.cheby1(7, 1.0, 820.0, fs=fo, output="sos") if kind == "cheby1"
+           else signal.butter(6, 800.0, fs=fo, output="sos"))
+    af = signal.sosfilt(sos, a, zi=signal.sosfilt_zi(sos) * a[0])[0][::os]
+    af = af + 0.07 * rng.standard_normal(af.size)
+    t = np.arange(af.size) / fs
+    rec = Recording(t, np.zeros_like(t), af, np.zeros_like(t), Metadata(b=0.009, sample_rate=fs))
+    return rec, t_in
+
+
+@pytest.mark.parametrize("kind", ["cheby1", "butter"])
+def test_a_re_impact_in_every_learning_window_is_not_taken_for_ringing(kind):
+    # test-050's failure: every strong pulse has a same-wall re-impact 0.3 times its
+    # size 17 samples later (below the third that breaks isolation). The error
+    # envelope took it for ringing the model lacks (0.27-0.30 at lags 15-19) and the
+    # detector dropped every re-impact (78 of 156). A re-impact is one more copy of
+    # the response: it is taken out of the learning windows (learned again without)
+    rec, t_in = _with_reimpacts(kind)
+    det = detect_impacts(rec)
+    ie, it = match_impacts(det.t, t_in, 0.5e-3)
+    assert det.n == t_in.size == ie.size == 156            # was 78 found
+    assert np.median(np.abs(det.t[ie] - t_in[it])) < 95e-6   # measured 75 (cheby1), 23 us
+    env = det.response.error_at(np.arange(14.0, 21.0))
+    assert env.max() < 0.03                                   # measured 0.014, was 0.27
