@@ -400,6 +400,7 @@ def run_case(case: Case) -> dict:
         "regime": truth.label, "expected": case.expected,
         "predicted": predicted, "correct": predicted == case.expected,
         "named": [c.name for c in rep.selected],
+        "not_excluded": rep.not_excluded,
         "coverage": coverage,
         "gap_before": d["gap_before"], "gap_after": d["gap_after"],
         "shrink": (d["gap_before"] - d["gap_after"]) / d["gap_before"]
@@ -420,9 +421,11 @@ def summarise(rows: list[dict]) -> dict:
     labels = list(EFFECTS) + ["none", "unexplained"]
     confusion = {e: {} for e in labels}
     for r in rows:
+        # a verdict that does not exclude another effect (GapReport.not_excluded) is
+        # its own column: scored on the name it gives, shown with what it leaves open
+        said = r["predicted"] + "".join(f" (or {n})" for n in r.get("not_excluded", []))
         confusion.setdefault(r["expected"], {})
-        confusion[r["expected"]][r["predicted"]] = confusion[r["expected"]].get(
-            r["predicted"], 0) + 1
+        confusion[r["expected"]][said] = confusion[r["expected"]].get(said, 0) + 1
     confusion = {k: v for k, v in confusion.items() if v}
     cat = [r for r in rows if r["kind"] == "catalogue" and "+" not in r["effect"]]
     pairs = [r for r in rows if r["kind"] == "catalogue" and "+" in r["effect"]]
