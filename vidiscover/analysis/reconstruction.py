@@ -11,6 +11,18 @@ laser's sheet resonance; ``v_disp`` is the laser derivative (the paper's
 "nonsmooth curve"). Pre/post-impact velocities: ``v_minus`` from the integral,
 ``v_plus = v_minus + dv``.
 
+**Time frame.** A causal anti-alias filter delays the laser as much as the
+accelerometer (:func:`lo_lag`, its DC group delay); the impacts are timed at their
+contact entries with that delay taken out, and ``analyze`` advances the smooth
+acceleration by it. The impact states, the contact exits and the flights use the
+integral pinned to the laser read as much later: pinned to the laser as recorded,
+the LO velocity at an impact was off by the delay times the LO acceleration (dev-009,
+343 us: r off by 0.009), and the laser's misfit (hundreds of micrometres on a hard-driven
+rig) was taken for position noise, so that most impacts of such walls were left out as
+"noisy". The arrays ``x`` and ``v`` stay pinned to the laser as recorded (the regime
+features read them and the shipped model was trained on them); the ball's position
+and velocity on a wall follow the impacts' frame.
+
 **Ball.** At an impact on the wall of sign s (+1 right, -1 left) the ball is at
 ``y = x + s b`` (eq. 5). A compliant wall holds the ball for a contact duration
 ``tau`` (the learned pulse response's, per wall; 0 for the exact engine's rigid
@@ -49,6 +61,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..acquisition import dc_group_delay
 from ..errors import InputError
 from ..params import G_ACCEL
 from ._table import check_columns, to_frame
@@ -109,7 +122,8 @@ class Reconstruction:
         Friction coefficient assumed.
     position_noise : float
         Robust RMS of laser minus reconstructed LO displacement (m), the ball
-        position uncertainty used by stage 3.
+        position uncertainty used by stage 3 (the laser read :func:`lo_lag` later,
+        against the LO of the impacts' frame).
     """
 
     t: np.ndarray = field(repr=False)
@@ -122,6 +136,7 @@ class Reconstruction:
     mu: float
     position_noise: float
     _traj: dict = field(default_factory=dict, repr=False)
+    _shift: object = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
         for name in ("x", "v", "v_disp"):
@@ -172,6 +187,10 @@ class Reconstruction:
         if on_wall.any():
             y[on_wall] = np.interp(t[on_wall], self.t, self.x) + side[on_wall] * self.b
             w[on_wall] = np.interp(t[on_wall], self.t, self.v)
+            if self._shift is not None:          # the LO of the impacts' frame
+                dx, dv = self._shift(t[on_wall] - self.t[0])
+                y[on_wall] += dx
+                w[on_wall] += dv
         free = inside & ~on_wall
         kk = k[free]
         tt = t[free]
@@ -297,7 +316,17 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
         raise InputError(f"{rec.name}: column 'x' has no finite value; the laser "
                          "displacement is needed to reconstruct the motion")
     drift = _drift(tr, xl, X_raw, okx, fs, drift_window)     # D and Dd at any times
-    (D0, Dd0), (D1, Dd1) = drift(tr[k]), drift(tr[k + 1])     # about each impact
+    lag = lo_lag(det)
+    if lag > 0:
+        # the laser read in the impacts' time frame (see lo_lag), between its finite
+        # samples (a sample counts when both samples about its advanced time are finite)
+        xl_a = _advanced(np.where(okx, xl, 0.0), tr, lag)
+        ok_a = _advanced(okx.astype(float), tr, lag) == 1.0
+        drift_a = _drift(tr, xl_a, X_raw, ok_a, fs, drift_window)
+        shift = _Shift(drift, drift_a)
+    else:
+        xl_a, ok_a, drift_a, shift = xl, okx, drift, None
+    (D0, Dd0), (D1, Dd1) = drift_a(tr[k]), drift_a(tr[k + 1])     # about each impact
     lin_D, lin_Dd = D0 * (1 - f) + D1 * f, Dd0 * (1 - f) + Dd1 * f    # lin(D), lin(Dd)
     x_f = X_raw                      # X_raw + D
     del X_raw
@@ -311,12 +340,19 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
         x_f[part] += D
         VD[part] += Dd
         v_f[part] += Dd
-    if okx.all():
+    # (the laser against the LO of the impacts' frame: x_f + shift)
+    if ok_a.all():
         step = max(1, n // 8192)
-        resid = xl[::step] - x_f[::step]
+        resid = xl_a[::step] - x_f[::step]
+        if shift is not None:
+            resid -= shift(tr[::step])[0]
     else:
-        resid = (xl - x_f)[okx]
-        resid = resid[:: max(1, resid.size // 8192)]
+        sel = np.flatnonzero(ok_a)
+        sel = sel[:: max(1, sel.size // 8192)]
+        resid = xl_a[sel] - x_f[sel]
+        if shift is not None:
+            resid -= shift(tr[sel])[0]
+    del xl_a, ok_a, drift_a
     position_noise = max(robust_std(resid), 1e-9)
 
     # ---- states at the impacts
@@ -327,17 +363,20 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
     y_imp = x_imp + side * b
 
     def lo_velocity(tq):
-        return np.interp(tq - t[0], tr, VD) + cdv[np.searchsorted(ti, tq - t[0])]
+        out = np.interp(tq - t[0], tr, VD) + cdv[np.searchsorted(ti, tq - t[0])]
+        return out if shift is None else out + shift(tq - t[0])[1]
 
     def lo_acc(tq):
         return np.interp(tq - t[0], tr, det.baseline)
 
     def lo_x(tq):
-        return np.interp(tq - t[0], tr, x_f)
+        out = np.interp(tq - t[0], tr, x_f)
+        return out if shift is None else out + shift(tq - t[0])[0]
 
     exits = _exits(det, t_imp, side, x_imp, v_plus, b, lo_x, lo_velocity)
     flights, traj = _flights(t_imp, side, x_imp, y_imp, v_minus, b, mu, t, x_f,
-                             det.baseline, fs, stick_tol, lo_x, lo_acc, lo_velocity, exits)
+                             det.baseline, fs, stick_tol, lo_x, lo_acc, lo_velocity, exits,
+                             shift)
     del lo_velocity, lo_acc, lo_x
     tr = None                        # (dropped before the laser derivative)
     VD = None                        # (dropped before the next full-length array)
@@ -348,7 +387,7 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
                               exits[3])
     return Reconstruction(t=t, x=x_f, v=v_f, v_disp=v_disp, impact_columns=impacts,
                           flight_columns=flights, b=b, mu=float(mu),
-                          position_noise=float(position_noise), _traj=traj)
+                          position_noise=float(position_noise), _traj=traj, _shift=shift)
 
 
 def _gradient(y: np.ndarray, h: float) -> np.ndarray:
@@ -490,25 +529,28 @@ def refly(recon: Reconstruction, det: ImpactDetection, mu: float, *,
         v0 = v[j] - cdv[np.searchsorted(first, j, side="right")]
         v1 = v[j + 1] - cdv[np.searchsorted(first, j + 1, side="right")]
         slope = (v1 - v0) / (t[j + 1] - t[j])
-        return slope * (tc - t[j]) + v0 + cdv[np.searchsorted(ti, tq - tr0)]
+        out = slope * (tc - t[j]) + v0 + cdv[np.searchsorted(ti, tq - tr0)]
+        return out if shift is None else out + shift(tq - tr0)[1]
 
     def lo_acc(tq):
         return np.interp(tq, t, det.baseline)
 
     def lo_x(tq):
-        return np.interp(tq, t, recon.x)
+        out = np.interp(tq, t, recon.x)
+        return out if shift is None else out + shift(tq - tr0)[0]
 
     ic = recon.impact_columns
     side = det.sign.astype(float)
+    shift = recon._shift
     exits = _exits(det, det.t, side, ic["x"], ic["v_plus"], b, lo_x, lo_velocity)
     flights, traj = _flights(det.t, side, ic["x"], ic["y"], ic["v_minus"], b, float(mu), t,
                              recon.x, det.baseline, fs, stick_tol, lo_x, lo_acc, lo_velocity,
-                             exits)
+                             exits, shift)
     impacts = _impact_columns(det.t, det.side, ic["x"], ic["y"], ic["v_minus"],
                               ic["v_plus"], dv, flights, exits[3])
     return Reconstruction(t=t, x=recon.x, v=v, v_disp=recon.v_disp, impact_columns=impacts,
                           flight_columns=flights, b=b, mu=float(mu),
-                          position_noise=recon.position_noise, _traj=traj)
+                          position_noise=recon.position_noise, _traj=traj, _shift=shift)
 
 
 def _impact_columns(t_imp, side_names, x_imp, y_imp, v_minus, v_plus, dv, flights,
@@ -552,6 +594,59 @@ def contact_durations(det: ImpactDetection) -> np.ndarray:
         taus = (tau, tau)
     tau = np.where(sign > 0, taus[0], taus[1])
     return np.where(np.isfinite(tau) & (tau > 0), tau, 0.0)
+
+
+def lo_lag(det: ImpactDetection) -> float:
+    """Low-frequency delay (s) of the recording's anti-alias filter, as learned.
+
+    A causal anti-alias filter delays the laser, the accelerometer and the base sensor
+    alike; at the LO's frequencies by its DC group delay
+    (:func:`vidiscover.acquisition.dc_group_delay`, the centroid of its impulse
+    response). The impacts are detected at their contact entries, this delay taken
+    out. The detection's smooth acceleration (``a_smooth``, ``baseline``) is expected
+    advanced by this delay (``analyze`` does it); :func:`reconstruct` pins its
+    integral to the laser read ``lo_lag`` later (:func:`_advanced`) for the impact
+    states, the exits and the flights, so that the LO motion and the impacts share one
+    time frame. 0 for a ``linear-phase`` chain (delay-compensated) and for the exact
+    engine's given pulse model.
+    """
+    resp = getattr(det, "response", None)
+    model = resp.model if resp is not None else getattr(det, "pulse", None)
+    if model is None or not getattr(model, "causal", False):
+        return 0.0
+    lag = dc_group_delay(model.kind, model.order, model.cutoff) / float(det.sample_rate)
+    return float(lag) if math.isfinite(lag) and lag > 0 else 0.0
+
+
+class _Shift:
+    """The LO of the impacts' time frame less the LO as recorded, ``(dx, dv)``.
+
+    Both are the integrated acceleration pinned to the laser by the drift smoother
+    (:func:`_drift`): as recorded (``drift``; the arrays :attr:`Reconstruction.x` and
+    ``v``, which the regime features read) and read :func:`lo_lag` later
+    (``drift_a``; the impact states, the exits and the flights). They differ by the
+    difference of the two smooth drifts only: called with times from the first sample.
+    """
+
+    def __init__(self, drift, drift_a):
+        self.drift, self.drift_a = drift, drift_a
+
+    def __call__(self, x):
+        x = np.asarray(x, dtype=float)
+        flat = np.atleast_1d(x).ravel()
+        (D0, Dd0), (D1, Dd1) = self.drift(flat), self.drift_a(flat)
+        return (D1 - D0).reshape(x.shape), (Dd1 - Dd0).reshape(x.shape)
+
+
+def _advanced(y: np.ndarray, tr: np.ndarray, lag: float) -> np.ndarray:
+    """``y`` read ``lag`` seconds later: ``y(tr + lag)``, linear between samples.
+
+    ``y`` itself (not a copy) when ``lag`` is 0; the last ``lag`` of the record
+    repeats the last sample.
+    """
+    if lag <= 0:
+        return y
+    return np.interp(tr + lag, tr, y)
 
 
 def _exits(det, t_imp, side, x_imp, v_plus, b, lo_x, lo_velocity):
@@ -612,10 +707,11 @@ def _first_where(cond, starts: np.ndarray, ends: np.ndarray, part: int = _PART) 
 
 
 def _flights(t_imp, side, x_imp, y_imp, v_minus, b, mu, t, x_f, acc, fs, stick_tol, lo_x,
-             lo_acc, lo_velocity, exits):
+             lo_acc, lo_velocity, exits, shift=None):
     """Flight table between consecutive contacts, each from an exit to the next entry.
 
-    ``exits``: ``(t, x, y, v)`` at each contact's exit (:func:`_exits`).
+    ``exits``: ``(t, x, y, v)`` at each contact's exit (:func:`_exits`); ``shift``: the
+    LO of the impacts' frame less ``x_f`` (:class:`_Shift`), None when they are one.
     """
     m = t_imp.size
     nf = max(m - 1, 0)
@@ -713,7 +809,7 @@ def _flights(t_imp, side, x_imp, y_imp, v_minus, b, mu, t, x_f, acc, fs, stick_t
 
     # ---- penetration of the reconstructed ball path through the walls
     pen = _penetration(t, x_f, ts, te, t_release, y_release, w_end, ss, b, traj, mu,
-                       w_start, ys)
+                       w_start, ys, shift)
     return {
         "i_start": i_s, "i_end": i_e, "t_start": ts, "t_end": te, "duration": dur,
         "side_start": np.where(ss > 0, "right", "left"),
@@ -727,7 +823,8 @@ def _flights(t_imp, side, x_imp, y_imp, v_minus, b, mu, t, x_f, acc, fs, stick_t
         "y_release": y_release}, traj
 
 
-def _penetration(t, x_f, ts, te, t_release, y_release, w_line, ss, b, traj, mu, w_start, ys):
+def _penetration(t, x_f, ts, te, t_release, y_release, w_line, ss, b, traj, mu, w_start, ys,
+                 shift=None):
     """Largest excursion (m) of the reconstructed ball beyond the walls, per flight."""
     nf = ts.size
     step = _PEN_STEP
@@ -751,9 +848,10 @@ def _penetration(t, x_f, ts, te, t_release, y_release, w_line, ss, b, traj, mu, 
         fl = np.repeat(np.arange(nf)[sl], c)
         idx = (np.arange(c.sum()) - np.repeat(np.cumsum(c) - c, c) + np.repeat(k, c)) * step
         tt = t[idx]
+        x_lo = x_f[idx] if shift is None else x_f[idx] + shift(tt - t[0])[0]
         if mu == 0.0:
             tr = t_release[fl]
-            y = np.where(tt < tr, x_f[idx] + ss[fl] * b, y_release[fl] + w_line[fl] * (tt - tr))
+            y = np.where(tt < tr, x_lo + ss[fl] * b, y_release[fl] + w_line[fl] * (tt - tr))
         else:
             T, Y = traj["t"], traj["y"]
             pos = (tt - T[fl, 0]) / (T[fl, -1] - T[fl, 0]) * (T.shape[1] - 1)
@@ -761,7 +859,7 @@ def _penetration(t, x_f, ts, te, t_release, y_release, w_line, ss, b, traj, mu, 
             i0 = pos.astype(int)
             f = pos - i0
             y = Y[fl, i0] * (1 - f) + Y[fl, i0 + 1] * f
-        z = y - x_f[idx]
+        z = y - x_lo
         exc = np.maximum(np.abs(z) - b, 0.0)
         np.maximum.at(out, fl, exc)
     return out
