@@ -358,6 +358,8 @@ def detect_impacts(rec, options: DetectionOptions | None = None, *, pulse=None,
         raise InputError(f"{rec.name}: column 'a' has no finite value; "
                          "the acceleration is needed to find impacts")
     clip = clipped_mask(a, a_range)
+    if clip.any():
+        clip = _without_smooth_extrema(a, clip, nan, fs, baseline_ms, threshold, a_range)
     bad = nan | clip
     af = fill_gaps(a, bad)
     warnings: list[str] = []
@@ -614,6 +616,48 @@ def detect_impacts(rec, options: DetectionOptions | None = None, *, pulse=None,
                            a_smooth=a_smooth, baseline=base, bad=bad,
                            n_clipped=int(clip.sum()), n_dropout=int(nan.sum()),
                            pulse=pulse, response=response, warnings=tuple(warnings))
+
+
+def _without_smooth_extrema(a: np.ndarray, clip: np.ndarray, nan: np.ndarray, fs: float,
+                            baseline_ms: float, threshold: float,
+                            a_range: float | None) -> np.ndarray:
+    """``clip`` less the short runs that are the forced response's own extremum.
+
+    :func:`.signals.clipped_mask` takes the record's extreme value, when repeated, for
+    the front end's rail. Behind a coarse ADC (a step above the noise) the forced
+    response's smooth trough or crest repeats its level exactly too (test-056, 12 bits:
+    the minimum -477.8 m/s^2 is not the rail, 490.3 is; each trough holds it for 1-3
+    samples): those runs were seeded as clipped pulses and fitted (4 false impacts,
+    SNR 6-38). A rail reached by a pulse stands out of the smooth part by the pulse
+    (1050 noise sigmas there); a smooth extremum does not (1.3). A run of at most
+    :data:`_MAX_CLIP_RUN` samples whose samples lie within ``threshold`` noise sigmas
+    of the smoother (over the record with the clipped samples bridged) is no clip.
+    Longer runs (a saturated forced response) and samples at or beyond a known range
+    stay clipped.
+    """
+    runs = [(lo, hi) for lo, hi in true_runs(clip) if hi - lo <= _MAX_CLIP_RUN]
+    if not runs:
+        return clip
+    bad = nan | clip
+    af = fill_gaps(a, bad)
+    sigma = robust_std(second_difference_sample(af, bad)) / math.sqrt(6.0)
+    if not sigma > 0:
+        return clip
+    n = a.size
+    win = max(7, int(round(baseline_ms * 1e-3 * fs)) | 1)
+    if win > n:
+        win = n if n % 2 else n - 1
+    if win < 5:
+        return clip
+    smooth = savgol_smooth(af, win)
+    out = clip.copy()
+    for lo, hi in runs:
+        seg = a[lo:hi]
+        if a_range is not None and np.any(np.abs(seg) >= a_range):
+            continue
+        if np.max(np.abs(seg - smooth[lo:hi])) <= threshold * sigma:
+            out[lo:hi] = False
+    return out
 
 
 def _main_lobe(models, fs: float) -> np.ndarray:
