@@ -620,6 +620,7 @@ def test_single_speed_wall_above_one_is_constrained_or_not_identified():
     assert far.kind == "undetermined" and far.terms == () and far.law is None
     assert far.formula.startswith("r not identified")
     assert "by more than 2 standard errors (0.01)" in far.note
+    assert "constant r reported" not in far.warning and "r not identified" in far.warning
     assert np.isnan(far.predict([0.5])[0])
     assert far.to_dict()["kind"] == "undetermined"
     below = discover_impact_law(v, r - 0.1, sigma=np.full(v.size, 0.058), n_boot=0)

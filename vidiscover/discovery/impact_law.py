@@ -1501,8 +1501,11 @@ def _constrained(res: ImpactLawResult, sig: np.ndarray | None) -> ImpactLawResul
             "estimate: no admissible constant r is consistent with the estimates, which "
             "are biased (missed or merged impacts, the flight law, the pulse model); r is "
             "not identified")
+    warning = None if res.warning is None else \
+        res.warning.replace("constant r reported", "r not identified (above 1)")
     return replace(res, formula=f"r not identified (estimates at {r0:.4g}, above 1)",
                    kind="undetermined", law=None, terms=(), coefficients={}, ci={},
+                   warning=warning,
                    boot_coefficients=np.empty((res.boot_coefficients.shape[0], 0)),
                    note=note if res.note is None else res.note + "; " + note,
                    valid_range=(math.nan, math.nan), effect=math.nan)
