@@ -58,3 +58,19 @@ def test_waterfall_axis_is_linear_so_bar_lengths_compare():
     assert bars[0] == 100.0 and bars[1] == 3.0        # each bar as long as its value
     labels = [t.get_text() for t in ax.texts]
     assert "3" in labels and "100" in labels          # small bars are read from their labels
+
+
+def test_a_law_not_excluded_by_the_recording_is_said_in_text_and_html():
+    from vidiscover.commands.gap import human_gap
+
+    doc = {"recording": "r", "gap_before": 40.0, "gap_after": 0.8, "threshold": 8.0,
+           "significant": True, "verdict": "asymmetric_restitution", "unexplained": 0.02,
+           "not_excluded": ["velocity_dependent_restitution"],
+           "attributed": [], "components": {"flights": {"before": 40.0, "after": 0.8}},
+           "effects": []}
+    for text in (human_gap(doc), _html(doc, [])):
+        assert "not excluded" in text.lower()
+        assert "velocity_dependent_restitution" in text and "one speed" in text
+    doc["not_excluded"] = []
+    assert "not excluded" not in human_gap(doc).lower()
+    assert "not excluded" not in _html(doc, []).lower()

@@ -51,9 +51,16 @@ def human_gap(doc: dict) -> str:
             f"{param_text(a['params'], a.get('ci'))})" for a in doc["attributed"]))
     lines.append(f"  unexplained share: {100 * doc['unexplained']:.0f} %  -> verdict: "
                  f"{doc['verdict']}")
+    if doc.get("not_excluded"):
+        lines.append(f"  not excluded: {', '.join(doc['not_excluded'])} "
+                     f"({_NOT_EXCLUDED_WHY})")
     if doc.get("out"):
         lines.append(f"  written to {doc['out']}/ ({', '.join(_top_level(doc['files']))})")
     return "\n".join(lines)
+
+
+_NOT_EXCLUDED_WHY = ("every wall's impacts come at one speed, where a law per wall gives "
+                     "the same r as a constant")
 
 
 def _top_level(files: list[str]) -> list[str]:
@@ -112,6 +119,9 @@ def _html(doc: dict, figures: list[str]) -> str:
                f"gap and leaves at most {100 * doc['threshold_drop'][1]:.0f} %)"
                if doc.get("threshold_drop") else "")
             + f": the gap is {'significant' if doc['significant'] else 'not significant'}.</p>"]
+    if doc.get("not_excluded"):
+        body.append(f"<p>Not excluded by this recording: {esc(', '.join(doc['not_excluded']))} "
+                    f"({esc(_NOT_EXCLUDED_WHY)}).</p>")
     if doc["attributed"]:
         body.append("<h2>Attributed</h2>")
         body.append(_table(["effect", "share of the gap", "parameters [95 % interval]"],
