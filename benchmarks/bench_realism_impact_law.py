@@ -55,7 +55,8 @@ from _case_cache import cached
 
 from vidiscover.analysis import analyze
 from vidiscover.corpus import N_CASES, realism_corpus
-from vidiscover.discovery import discover, discover_impact_law
+from vidiscover.discovery import discover
+from vidiscover.discovery.pipeline import _impact_law
 
 MIN_IMPACTS = 10
 R_TOL = 0.03
@@ -118,9 +119,7 @@ def _tables(case) -> dict:
 
 def _law(table, n_boot: int):
     """The impact law of one wall as ``discover`` fits it (its defaults, seed 0)."""
-    return discover_impact_law(table["v"].to_numpy(), table["r"].to_numpy(),
-                               sigma=table["sigma"].to_numpy(),
-                               groups=table["group"].to_numpy(), seed=0, n_boot=n_boot)
+    return _impact_law(table, {"seed": 0, "n_boot": n_boot})
 
 
 def score_constant(case, n_boot: int, tables: dict) -> list[dict]:

@@ -831,3 +831,47 @@ def test_law_above_one_at_rest_is_not_admissible():
     assert law.velocity_dependent, law.formula
     assert np.nanmax(law.predict(np.linspace(0.0, v.max(), 50))) <= 1.008 + 1e-12
     assert "outside the admissible 0 < r <= 1.008" in law.note
+
+
+def test_a_compliant_walls_model_form_scatter_keeps_a_small_smooth_bias_constant():
+    """The r estimates of a compliant wall carry smooth speed-dependent biases that
+    their standard errors do not (the contact taken as an impulse at its exit): five
+    speed clusters of a constant r = 0.6 read 0.005 high at the slowest and 0.0005
+    low at the fastest, each to 6e-4. From the standard errors alone that 0.0057
+    fall is a law (threshold 0.004); with the model-form scatter that ``discover``
+    gives a wall whose learned contact lasts (COMPLIANT_FORM_SCATTER, 0.005) the
+    threshold is 0.0075 and r is constant, while a real fall of 0.1 stays a law."""
+    rng = np.random.default_rng(3)
+    v = np.repeat([0.4, 0.7, 1.0, 1.3, 1.6], 20) + rng.normal(0, 0.01, 100)
+    bias = np.repeat([0.005, 0.0025, 0.001, 0.0, -0.0005], 20)
+    r = 0.6 + bias + rng.normal(0, 0.0005, 100)
+    sigma = np.full(100, 0.0006)
+    assert discover_impact_law(v, r, sigma=sigma, n_boot=0).velocity_dependent
+    floor = impact_law.COMPLIANT_FORM_SCATTER
+    res = discover_impact_law(v, r, sigma=sigma, n_boot=0, form_scatter=floor)
+    assert res.kind == "constant", res.formula
+    assert res.effect_threshold == pytest.approx(0.0075, abs=2e-4)
+    falling = 0.8 - 0.08 * v + rng.normal(0, 0.0005, 100)
+    law = discover_impact_law(v, falling, sigma=sigma, n_boot=0, form_scatter=floor)
+    assert law.kind == "linear" and law.coefficients["v"] == pytest.approx(-0.08, abs=0.002)
+
+
+def test_discover_gives_the_model_form_scatter_to_compliant_walls_only():
+    """``discover`` pools each wall's impacts with its learned contact duration: a wall
+    whose contact lasts in any recording is fitted with COMPLIANT_FORM_SCATTER, a rigid
+    wall (the exact engine: contact 0) exactly as before."""
+    import pandas as pd
+
+    from vidiscover.discovery.pipeline import IMPACT_DATA_COLUMNS, _impact_law
+
+    rng = np.random.default_rng(3)
+    v = np.repeat([0.4, 0.7, 1.0, 1.3, 1.6], 20) + rng.normal(0, 0.01, 100)
+    r = 0.6 + np.repeat([0.005, 0.0025, 0.001, 0.0, -0.0005], 20) + rng.normal(0, 5e-4, 100)
+    d = pd.DataFrame({"recording": "a", "group": 0, "t": np.arange(100.0), "v": v, "r": r,
+                      "sigma": 0.0006, "contact_s": 0.0})[list(IMPACT_DATA_COLUMNS)]
+    rigid = _impact_law(d, {"n_boot": 0})
+    same = discover_impact_law(v, r, sigma=np.full(100, 0.0006), groups=np.zeros(100),
+                               n_boot=0)
+    assert rigid.velocity_dependent and rigid.formula == same.formula
+    compliant = _impact_law(d.assign(contact_s=np.r_[np.zeros(99), 3e-4]), {"n_boot": 0})
+    assert compliant.kind == "constant", compliant.formula

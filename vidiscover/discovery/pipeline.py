@@ -50,10 +50,16 @@ import pandas as pd
 from .._atomic import to_jsonable
 from .._workers import WorkerPool, can_fork, n_workers
 from ..analysis import AnalysisResult, DetectionOptions, analyze
+from ..analysis.reconstruction import contact_durations
 from ..errors import InputError
 from ..recording import Recording
 from .flight_law import MAX_TILT_DEG
-from .impact_law import CLAIMED_BEYOND, MIN_EFFECT, discover_impact_law
+from .impact_law import (
+    CLAIMED_BEYOND,
+    COMPLIANT_FORM_SCATTER,
+    MIN_EFFECT,
+    discover_impact_law,
+)
 from .impact_result import ImpactLawResult
 
 __all__ = ["DiscoveryResult", "discover", "SIDES", "IMPACT_DATA_COLUMNS"]
@@ -61,7 +67,7 @@ __all__ = ["DiscoveryResult", "discover", "SIDES", "IMPACT_DATA_COLUMNS"]
 #: The two walls, in the order of the paper's tables.
 SIDES = ("right", "left")
 #: Columns of :attr:`DiscoveryResult.impact_data` tables.
-IMPACT_DATA_COLUMNS = ("recording", "group", "t", "v", "r", "sigma")
+IMPACT_DATA_COLUMNS = ("recording", "group", "t", "v", "r", "sigma", "contact_s")
 #: ``flight`` of the summary when the flight-law discovery did not run.
 _NOT_RUN = {"identified": False, "reason": "flight-law discovery not run", "mu": None,
             "theta_deg": None, "terms": [], "coefficients": [], "equation": "not identified"}
@@ -246,8 +252,16 @@ def _reanalysis(rec: Recording, detection, law: tuple[float, float], pulse) -> A
 
 
 def _impact_law(d: pd.DataFrame, kws: Mapping) -> ImpactLawResult:
-    """:func:`discover_impact_law` of one wall's pooled impacts."""
-    return discover_impact_law(d["v"], d["r"], sigma=d["sigma"], groups=d["group"], **kws)
+    """:func:`discover_impact_law` of one wall's pooled impacts.
+
+    A wall whose learned contact lasts (``contact_s`` > 0 in any recording: a
+    compliant wall) is given the model-form scatter
+    :data:`~vidiscover.discovery.impact_law.COMPLIANT_FORM_SCATTER`; a rigid one
+    none.
+    """
+    form = COMPLIANT_FORM_SCATTER if bool((d["contact_s"] > 0).any()) else 0.0
+    return discover_impact_law(d["v"], d["r"], sigma=d["sigma"], groups=d["group"],
+                               **{"form_scatter": form, **kws})
 
 
 def _instrument_of(analysis: AnalysisResult):
@@ -313,7 +327,8 @@ def _pool(analyses: Sequence[AnalysisResult], side: str) -> pd.DataFrame:
         frames.append(pd.DataFrame({
             "recording": a.name, "group": k, "t": it["t"].to_numpy(dtype=float)[sel],
             "v": np.abs(it["u_minus"].to_numpy(dtype=float)[sel]), "r": r,
-            "sigma": it["r_rel_error"].to_numpy(dtype=float)[sel] * np.abs(r)}))
+            "sigma": it["r_rel_error"].to_numpy(dtype=float)[sel] * np.abs(r),
+            "contact_s": contact_durations(a.detection)[sel]}))
     return pd.concat(frames, ignore_index=True)[list(IMPACT_DATA_COLUMNS)]
 
 
