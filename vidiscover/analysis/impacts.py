@@ -76,9 +76,10 @@ from .signals import (
     clipped_mask,
     fill_gaps,
     good_sample,
+    noise_sigma,
     robust_std,
     savgol_smooth,
-    second_difference_sample,
+    smoother_window,
     true_runs,
 )
 
@@ -376,9 +377,7 @@ def detect_impacts(rec, options: DetectionOptions | None = None, *, pulse=None,
     else:
         pulse = pulse or PulseModel()
         models = (pulse, pulse)
-    win = max(7, int(round(baseline_ms * 1e-3 * fs)) | 1)
-    if win > n:
-        win = n if n % 2 else n - 1
+    win = smoother_window(baseline_ms, fs, n)
     fit = _Fitter(af, bad, models, fs, int(fit_halfwidth))
     hw = fit.hw
     m1, m2 = float(getattr(rec.meta, "m1", 0.0)), float(getattr(rec.meta, "m2", 0.0))
@@ -450,7 +449,7 @@ def detect_impacts(rec, options: DetectionOptions | None = None, *, pulse=None,
 
     # round 0: the strong pulses over a first (pulse-contaminated) smooth part
     base = savgol_smooth(smoother_input(), win)
-    sigma = robust_std(second_difference_sample(af, bad)) / math.sqrt(6.0)
+    sigma = noise_sigma(af, bad)
     resid = af - base
     resid[bad] = 0.0
     if not sigma > 0:
@@ -640,13 +639,10 @@ def _without_smooth_extrema(a: np.ndarray, clip: np.ndarray, nan: np.ndarray, fs
         return clip
     bad = nan | clip
     af = fill_gaps(a, bad)
-    sigma = robust_std(second_difference_sample(af, bad)) / math.sqrt(6.0)
+    sigma = noise_sigma(af, bad)
     if not sigma > 0:
         return clip
-    n = a.size
-    win = max(7, int(round(baseline_ms * 1e-3 * fs)) | 1)
-    if win > n:
-        win = n if n % 2 else n - 1
+    win = smoother_window(baseline_ms, fs, a.size)
     if win < 5:
         return clip
     smooth = savgol_smooth(af, win)

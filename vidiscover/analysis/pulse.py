@@ -79,7 +79,13 @@ from ..acquisition import (
     shape_centroid,
 )
 from ..errors import InputError
-from .signals import bridge_gaps, fill_gaps, robust_std, savgol_smooth, second_difference_sample
+from .signals import (
+    bridge_gaps,
+    fill_gaps,
+    noise_sigma,
+    savgol_smooth,
+    smoother_window,
+)
 
 __all__ = ["PulseModel", "PulseResponse", "learn_pulse"]
 
@@ -641,10 +647,8 @@ def _strong_pulses(af: np.ndarray, bad: np.ndarray, fs: float, n_pulses: int,
     Returns peak samples, windows (flipped to a positive peak), noise, sign (+1: right).
     """
     n = af.size
-    win = max(7, int(round(smooth_ms * 1e-3 * fs)) | 1)
-    if win > n:
-        win = n if n % 2 else n - 1
-    sigma = robust_std(second_difference_sample(af, bad)) / math.sqrt(6.0)
+    win = smoother_window(smooth_ms, fs, n)
+    sigma = noise_sigma(af, bad)
     if not sigma > 0:
         return np.zeros(0, dtype=np.int64), np.zeros((0, pre + post + 1)), sigma, np.zeros(0)
     signed = savgol_smooth(af, win)          # (in place: full-length arrays are large)

@@ -186,6 +186,27 @@ def second_difference_sample(y: np.ndarray, bad: np.ndarray, count: int = 8192
     return (y[k + 2] - y[k + 1]) - (y[k + 1] - y[k])
 
 
+def noise_sigma(y: np.ndarray, bad: np.ndarray) -> float:
+    """White-noise standard deviation of ``y`` from its second differences (robust).
+
+    ``robust_std`` of :func:`second_difference_sample` over ``sqrt(6)``: the second
+    difference of white noise has 6 times its variance, and a smooth signal leaves
+    almost nothing in it.
+    """
+    return robust_std(second_difference_sample(y, bad)) / math.sqrt(6.0)
+
+
+def smoother_window(ms: float, fs: float, n: int) -> int:
+    """Odd smoother window (samples) of about ``ms`` milliseconds.
+
+    At least 7, at most the record's ``n`` samples (the largest odd count within them).
+    """
+    win = max(7, int(round(ms * 1e-3 * fs)) | 1)
+    if win > n:
+        win = n if n % 2 else n - 1
+    return win
+
+
 def _ranked(ok, m: int, step: int) -> np.ndarray:
     """Positions of every ``step``-th True of the mask ``ok(lo, hi)`` over ``[0, m)``."""
     parts, rank = [], 0
