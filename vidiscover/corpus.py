@@ -23,7 +23,10 @@ same on every machine and in every process. The split is fixed and documented:
 * ``"holdout2"`` (96 cases, a fourth stream): opened when the holdout split's misses
   had in turn been read case by case across several stops (2026-11-26); the figures
   quoted from then on come from here, run once per stop, after every change of the
-  stop has landed.
+  stop has landed;
+* ``"holdout3"`` (96 cases, a fifth stream): opened when ``holdout2`` had been run for
+  one stop's quotes and its misses read (2026-11-26, second stop); quotes of later stops
+  come from here, run once per stop, after the stop's changes have landed.
 
 The base amplitude is chosen so that the ball impacts: the linear LO response is
 drawn between 0.6 and 2.5 clearances and, when a short exact simulation of an
@@ -56,9 +59,11 @@ __all__ = ["ENTROPY", "SPLITS", "N_CASES", "N_SUITE", "RANGES", "RealismCase", "
 #: Root entropy of every draw of the corpus (fixed: changing it changes the corpus).
 ENTROPY = 20261123
 #: Split name -> stream id of its seeds.
-SPLITS: Mapping[str, int] = {"dev": 1, "test": 2, "holdout": 3, "holdout2": 4}
+SPLITS: Mapping[str, int] = {"dev": 1, "test": 2, "holdout": 3, "holdout2": 4,
+                             "holdout3": 5}
 #: Number of cases of each split.
-N_CASES: Mapping[str, int] = {"dev": 96, "test": 96, "holdout": 96, "holdout2": 96}
+N_CASES: Mapping[str, int] = {"dev": 96, "test": 96, "holdout": 96, "holdout2": 96,
+                              "holdout3": 96}
 #: Number of dev cases the test suite runs (the first ones of the split).
 N_SUITE = 24
 
