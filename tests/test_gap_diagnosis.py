@@ -217,15 +217,17 @@ def test_constants_per_wall_at_one_speed_per_wall_leave_a_law_not_excluded():
 
     rng = np.random.default_rng(1)
 
-    def report(spread, name="asymmetric_restitution", selected=1):
+    def report(spread, name="asymmetric_restitution", second=None):
         side = np.repeat([1, -1], 40)
         base = np.where(side == 1, 0.30, 0.18)
         speed = base * (1 + spread * rng.uniform(-0.5, 0.5, side.size))
         real = SimpleNamespace(impacts={"speed": speed, "side": side})
         fit = SimpleNamespace(name=name, gap=SimpleNamespace(total=2.0))
         nominal = SimpleNamespace(gap=SimpleNamespace(total=100.0))
+        selected = [fit] if second is None else [
+            SimpleNamespace(name=second, gap=SimpleNamespace(total=50.0)), fit]
         return GapReport(name="x", model=SimpleNamespace(real=real), nominal=nominal,
-                         candidates=[fit], selected=[fit] * selected, significant=True)
+                         candidates=[fit], selected=selected, significant=True)
 
     one = report(0.3 * ONE_SPEED)
     assert _speed_spread(one.model.real) < ONE_SPEED
@@ -233,7 +235,14 @@ def test_constants_per_wall_at_one_speed_per_wall_leave_a_law_not_excluded():
     assert one.not_excluded == ["velocity_dependent_restitution"]
     assert report(3 * ONE_SPEED).not_excluded == []              # speeds spread: told apart
     assert report(0.3 * ONE_SPEED, "coulomb_friction").not_excluded == []
-    assert report(0.3 * ONE_SPEED, selected=2).not_excluded == []   # a pair
+    # a pair holding constants per wall (first or second) leaves the law open too
+    pair = report(0.3 * ONE_SPEED, second="clearance_error")
+    assert pair.confident and pair.not_excluded == ["velocity_dependent_restitution"]
+    assert report(3 * ONE_SPEED, second="clearance_error").not_excluded == []
+    assert report(0.3 * ONE_SPEED, "coulomb_friction", "clearance_error").not_excluded == []
+    unsure = report(0.3 * ONE_SPEED)
+    unsure.selected[0].gap.total = 80.0                             # not confident
+    assert unsure.verdict == "unexplained" and unsure.not_excluded == []
     few = report(0.3 * ONE_SPEED)
     few.model.real.impacts["side"][:] = 1                           # no left impacts
     assert _speed_spread(few.model.real) is None and few.not_excluded == []
