@@ -295,9 +295,31 @@ def _workers_for(n_jobs: int | None, width: int, *, fitting: bool) -> WorkerPool
     if cores > 1 and workers >= 1 and can_fork():
         if fitting:
             _fitting_imports()
+        else:
+            _analysis_imports()
         # forked now, before this process starts a thread of its own (the bar's)
-        return WorkerPool(workers)
+        return WorkerPool(workers, warm_up=None if fitting else _keep_freed_memory)
     return WorkerPool(0)
+
+
+def _keep_freed_memory() -> None:
+    """Warm-up of an analysis worker: glibc keeps the memory freed for reuse.
+
+    An analysis allocates and frees arrays of a few hundred kB to a few MB thousands
+    of times; by default glibc maps each afresh and unmaps it when freed, so that
+    every page is faulted in again (25-35 thousand page faults an analysis).
+    Served from the heap and not given back (the worker is short-lived), the pages
+    are reused: about 9 thousand faults, 8 % less CPU an analysis. No effect on the
+    results; skipped where the C library is not glibc.
+    """
+    import ctypes
+
+    try:
+        libc = ctypes.CDLL("libc.so.6")
+        libc.mallopt(-3, 32 << 20)       # M_MMAP_THRESHOLD: blocks below 32 MB on the heap
+        libc.mallopt(-1, 256 << 20)      # M_TRIM_THRESHOLD: keep up to 256 MB freed
+    except (OSError, AttributeError):    # pragma: no cover - not glibc
+        pass
 
 
 def _fitting_imports() -> None:
@@ -308,6 +330,27 @@ def _fitting_imports() -> None:
     import pysindy  # noqa: F401
     import scipy.optimize  # noqa: F401
     import scipy.special  # noqa: F401
+
+
+def _analysis_imports() -> None:
+    """Load what every analysis imports on first use (about 0.1 s of CPU).
+
+    Loaded once before the analysts fork rather than once in each of them; the
+    fitting libraries load most of these modules anyway.
+    """
+    import scipy.cluster.hierarchy  # noqa: F401
+    import scipy.linalg  # noqa: F401
+    import scipy.optimize  # noqa: F401
+    import scipy.spatial.distance  # noqa: F401
+
+    from .. import _prototypes  # noqa: F401
+
+
+def _fitting_loaded() -> bool:
+    """Whether :func:`_fitting_imports` has nothing left to load."""
+    import sys
+
+    return "pysindy" in sys.modules
 
 
 def _analysis_task(task: tuple) -> AnalysisResult:
@@ -439,9 +482,15 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
     # libraries fit the impact laws on the same analyses (used unless the flight law
     # sends them to be redone)
     todo = [k for k, it in enumerate(items) if not isinstance(it, AnalysisResult)]
+    # loading the fitting libraries counts as one more task (about 0.5 s of CPU, as
+    # long as half an analysis): with a worker per analysis, the analyses and the load
+    # share the cores to the end, where this process would otherwise take an analysis
+    # after the load and run it alone while the workers wait (3 recordings on 2 cores:
+    # 1.75 -> 1.5 s of wall)
+    width = len(todo) + (len(todo) > 1 and not _fitting_loaded())
     bar = None
     try:
-        with _workers_for(n_jobs, len(todo), fitting=False) as analysts:   # forks here
+        with _workers_for(n_jobs, width, fitting=False) as analysts:   # forks here
             if progress:
                 from tqdm import tqdm
 
