@@ -89,6 +89,7 @@ _BLOCK = 16                 # samples per block of the drift smoother
 _PEN_STEP = 4               # wall penetration is checked every _PEN_STEP samples
 _PEN_PART = 1 << 16         # checked samples per part (bounds the temporaries)
 _PART = 1 << 16             # samples per part of the drift's evaluation
+_RAIL_RUN = 8               # samples in a row at the laser's extreme value: a rail
 
 
 @dataclass(frozen=True, eq=False)
@@ -319,11 +320,14 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
                          "displacement is needed to reconstruct the motion")
     drift = _drift(tr, xl, X_raw, okx, fs, drift_window)     # D and Dd at any times
     lag = lo_lag(det)
-    if lag > 0:
+    rails = _laser_rails(xl, okx)
+    if lag > 0 or rails is not None:
         # the laser read in the impacts' time frame (see lo_lag), between its finite
-        # samples (a sample counts when both samples about its advanced time are finite)
-        xl_a = _advanced(np.where(okx, xl, 0.0), tr, lag)
-        ok_a = _advanced(okx.astype(float), tr, lag) == 1.0
+        # samples off its rails (a sample counts when both samples about its advanced
+        # time count)
+        pin = okx if rails is None else okx & ~rails
+        xl_a = _advanced(np.where(pin, xl, 0.0), tr, lag)
+        ok_a = _advanced(pin.astype(float), tr, lag) == 1.0
         drift_a = _drift(tr, xl_a, X_raw, ok_a, fs, drift_window)
         shift = _Shift(drift, drift_a)
     else:
@@ -666,6 +670,35 @@ class _Shift:
         flat = np.atleast_1d(x).ravel()
         (D0, Dd0), (D1, Dd1) = self.drift(flat), self.drift_a(flat)
         return (D1 - D0).reshape(x.shape), (Dd1 - Dd0).reshape(x.shape)
+
+
+def _laser_rails(xl: np.ndarray, ok: np.ndarray) -> np.ndarray | None:
+    """Samples of a saturated laser (its rails), None when it never saturates.
+
+    A laser beyond its range reads its full scale: the record's extreme value, held
+    for as long as the LO stays out there. Pinned to those samples, the integrated
+    acceleration was pulled onto the rail (test-033, a 10 mm laser on a 10.7 mm RMS
+    LO: 2 of 3 samples on a rail, the laser's misfit 2.7 mm, the impacts' states off
+    by millimetres). An extreme value counts as a rail when it is held for at least
+    :data:`_RAIL_RUN` samples in a row; every sample at it is then left out of the
+    pinning (a quantised laser's crest at the extreme value, held a few samples, is a
+    true reading that the other samples pin as well).
+    """
+    if not ok.any():
+        return None
+    v = xl[ok]
+    out = None
+    for ext in (float(v.max()), float(v.min())):
+        at = ok & (xl == ext)
+        if at.sum() < _RAIL_RUN:
+            continue
+        edges = np.diff(np.r_[0, at.view(np.int8), 0])
+        runs = np.flatnonzero(edges < 0) - np.flatnonzero(edges > 0)
+        if runs.max() >= _RAIL_RUN:
+            out = at if out is None else out | at
+    if out is not None and out.sum() >= ok.sum():
+        return None                      # a constant laser: nothing else to pin to
+    return out
 
 
 def _advanced(y: np.ndarray, tr: np.ndarray, lag: float) -> np.ndarray:
