@@ -184,16 +184,52 @@ def _exit_interrupted() -> None:
 
 
 def entry() -> None:
-    """The ``vidiscover`` console script: :func:`main` in a process of its own."""
+    """The ``vidiscover`` console script: :func:`main` in a process of its own.
+
+    A finished command leaves without the interpreter's teardown (:func:`_leave`).
+    """
     import signal
 
     _OWN_PROCESS[0] = True
     try:
         main()
+    except SystemExit as done:            # how click's main() always ends
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        _leave(done.code)
+        raise
     finally:
         # the command is done (or its interrupt reported): a Ctrl-C during the
         # interpreter's shutdown must not turn its exit status into death by SIGINT
         signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
+def _leave(code) -> None:
+    """Exit the finished command's process now with status ``code``.
+
+    The exit handlers run (:mod:`atexit`: temporary folders, child processes) and the
+    standard streams are flushed, then the process ends (``os._exit``) without the
+    interpreter's teardown, which takes 0.3-0.9 s once numpy, pandas, scipy and
+    scikit-learn are loaded (freeing every module's objects one by one) and changes
+    nothing: every output file is closed by then. Returns (the caller exits the usual
+    way) for a non-numeric status or while another non-daemon thread still runs.
+    """
+    import threading
+
+    if not (code is None or isinstance(code, int)):
+        return
+    main_thread = threading.main_thread()
+    if any(t is not main_thread and not t.daemon and t.is_alive()
+           for t in threading.enumerate()):
+        return
+    import atexit
+
+    atexit._run_exitfuncs()
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    os._exit(code or 0)
 
 
 class LazyGroup(click.Group):
