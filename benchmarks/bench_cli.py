@@ -15,7 +15,8 @@ Prints, each with its target and ``MET`` / ``MISSED`` (median and best of ``--ru
 
 The recordings are written once into a temporary folder first (not timed). Timings
 depend on the machine's load: the load average is printed; quote figures from an idle
-machine only.
+machine only. Each row also gives the median CPU time (user + system, worker processes
+included), which a busy machine changes much less: compare versions by it there.
 
 Usage: ``python benchmarks/bench_cli.py [--runs 5]``
 """
@@ -25,6 +26,7 @@ from __future__ import annotations
 import argparse
 import os
 import platform
+import resource
 import shutil
 import statistics
 import subprocess
@@ -36,12 +38,28 @@ from pathlib import Path
 TARGETS = {"help": 0.2, "analyze_known": 6e-3, "gap": 5.0, "discover": 3.0}
 
 
-def _time(cmd: list[str], runs: int, cwd: Path | None = None) -> list[float]:
-    out = []
+def _children_cpu() -> float:
+    """User + system CPU (s) of the finished child processes (and theirs)."""
+    ru = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return ru.ru_utime + ru.ru_stime
+
+
+class _Times(list):
+    """Wall times (s) of runs, with their CPU times (user + system) in ``cpu``."""
+
+    cpu: list[float] = []
+
+
+def _time(cmd: list[str], runs: int, cwd: Path | None = None) -> _Times:
+    """Wall and CPU times of ``runs`` runs (CPU of the process and its workers)."""
+    out, cpu = _Times(), []
     for _ in range(runs):
+        c = _children_cpu()
         t = time.perf_counter()
         subprocess.run(cmd, check=True, capture_output=True, cwd=cwd)
         out.append(time.perf_counter() - t)
+        cpu.append(_children_cpu() - c)
+    out.cpu = cpu
     return out
 
 
@@ -52,6 +70,9 @@ def _row(name: str, times: list[float], target: float | None, unit: str = "s") -
     if target is not None:
         line += (f"   target <= {target * scale:g} {unit}: "
                  f"{'MET' if med <= target else 'MISSED'}")
+    cpu = getattr(times, "cpu", None)
+    if cpu:
+        line += f"   (CPU median {statistics.median(cpu) * scale:.2f} {unit})"
     return line
 
 
@@ -67,19 +88,23 @@ def _write_recordings(folder: Path) -> None:
     subprocess.run([sys.executable, "-c", code], check=True, cwd=folder)
 
 
-def _in_process(runs: int) -> dict[str, list[float]]:
+def _in_process(runs: int) -> dict[str, _Times]:
     from vidiscover.analysis import PulseModel, analyze
     from vidiscover.params import preset
     from vidiscover.workflows import simulate_to_memory
 
     rec, _, _ = simulate_to_memory(preset("paper", b=0.009), seed=1, label=False)
-    out = {"known": [], "learned": []}
+    out = {"known": _Times(), "learned": _Times()}
     for key, kw in (("known", {"pulse": PulseModel()}), ("learned", {})):
         analyze(rec, n_boot=0, **kw)                 # imports, caches
+        cpu = []
         for _ in range(runs):
+            c = time.process_time()
             t = time.perf_counter()
             analyze(rec, n_boot=0, **kw)
             out[key].append(time.perf_counter() - t)
+            cpu.append(time.process_time() - c)
+        out[key].cpu = cpu
     return out
 
 
