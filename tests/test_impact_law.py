@@ -689,6 +689,27 @@ def test_speeds_of_one_cluster_identify_no_speed_dependence():
     assert law.coefficients["1"] == pytest.approx(0.59, abs=0.005)
 
 
+def test_one_cluster_band_is_unbounded_outside_the_observed_speeds():
+    """One speed cluster tells no speed dependence (infinite reporting threshold): the
+    band of its constant is the bootstrap's inside the observed speeds and infinite
+    outside them (None in the JSON band), not the bootstrap's narrow width of the mean
+    (it was 0.0002 wide at 1.4 x the fastest impact: realism test-067 right, a
+    Hunt-Crossley wall whose single cluster's constant missed the third clearance
+    by 0.033 behind a band of zero width)."""
+    rng = np.random.default_rng(76)
+    v = 2.86 * (1 + rng.normal(0, 0.01, 40))
+    law = discover_impact_law(v, 0.59 + rng.normal(0, 1e-3, 40), sigma=np.full(40, 1e-3),
+                              n_boot=50)
+    assert math.isinf(law.effect_threshold)
+    v0, v1 = law.speed_range
+    lo, mid, hi = law.band(np.array([0.5 * (v0 + v1), 1.4 * v1, 0.6 * v0]))
+    assert 0 < hi[0] - lo[0] < 0.002 and lo[0] <= mid[0] <= hi[0]
+    assert np.all(np.isinf(lo[1:])) and np.all(np.isinf(hi[1:]))
+    band = law.to_dict()["band"]
+    assert band["hi"][0] is None and band["hi"][-1] is None
+    assert any(x is not None for x in band["hi"])
+
+
 def _stray_wall(n_stray: int):
     """A constant-r wall (0.816) hit at 0.86 and 1.30 m/s (sigma 0.007 and 0.005),
     plus ``n_stray`` impacts at 1.67-1.81 m/s with r = 0.70 / v: they leave as fast as
@@ -875,3 +896,31 @@ def test_discover_gives_the_model_form_scatter_to_compliant_walls_only():
     assert rigid.velocity_dependent and rigid.formula == same.formula
     compliant = _impact_law(d.assign(contact_s=np.r_[np.zeros(99), 3e-4]), {"n_boot": 0})
     assert compliant.kind == "constant", compliant.formula
+
+
+def test_a_compliant_walls_model_form_scatter_lets_the_clusters_keep_hunt_crossley():
+    """A Hunt-Crossley wall (alpha 0.6 s/m) at three speed clusters, as dev-080 right
+    of the realism corpus: the slow cluster reads 0.006 low, each cluster to 1e-3.
+    Without a model-form scatter its cluster means rule Hunt-Crossley out and the
+    two-coefficient ``0.954 - 0.371 v`` is reported (RMS 0.010 against the truth from
+    0.1 to 0.6 m/s); with COMPLIANT_FORM_SCATTER in the cluster means' errors too,
+    Hunt-Crossley is adequate, sparser, and reported (RMS 0.0016)."""
+    from vidiscover.discovery.impact_terms import hunt_crossley_restitution as r_hc
+
+    rng = np.random.default_rng(0)
+    n = [80, 40, 40]
+    v = np.repeat([0.282, 0.371, 0.430], n) + rng.normal(0, 0.003, 160)
+    r = r_hc(0.6 * v) + np.repeat([-0.006, 0.0, 0.0], n) + rng.normal(0, 0.0005, 160)
+    sigma = np.repeat([0.001, 0.0008, 0.0006], n)
+    grid = np.linspace(0.1, 0.6, 30)
+
+    def rms(law):
+        return float(np.sqrt(np.mean((law.predict(grid) - r_hc(0.6 * grid)) ** 2)))
+
+    rigid = discover_impact_law(v, r, sigma=sigma, n_boot=0)
+    assert rigid.kind == "linear" and rms(rigid) > 0.009, rigid.formula
+    law = discover_impact_law(v, r, sigma=sigma, n_boot=0,
+                              form_scatter=impact_law.COMPLIANT_FORM_SCATTER)
+    assert law.kind == "hunt-crossley", law.formula
+    assert law.coefficients[law.terms[0]] == pytest.approx(0.6, abs=0.015)
+    assert rms(law) < 0.003

@@ -277,7 +277,10 @@ class ImpactLawResult:
         dependence too small to be reported (an effect up to
         :attr:`effect_threshold` over the observed span) may continue there: the
         band is widened on both sides by ``effect_threshold * d / span``, ``d``
-        the distance (m/s) to the observed range.
+        the distance (m/s) to the observed range. Where no speed dependence could
+        be told at all (the impact speeds form one cluster: an infinite
+        :attr:`effect_threshold`), r is not identified outside the observed speeds:
+        the band is infinite there (None in :meth:`to_dict`).
 
         Parameters
         ----------
@@ -306,8 +309,11 @@ class ImpactLawResult:
         v0, v1 = self.speed_range
         span = max(v1 - v0, 1e-12)
         dist = np.maximum(v0 - v_grid, 0.0) + np.maximum(v_grid - v1, 0.0)
-        extra = (self.effect_threshold if math.isfinite(self.effect_threshold) else 0.0) \
-            * dist / span
+        thr = self.effect_threshold
+        if math.isinf(thr):   # no speed dependence could be told (one speed cluster)
+            extra = np.where(dist > 0.0, math.inf, 0.0)
+        else:
+            extra = (thr if math.isfinite(thr) else 0.0) * dist / span
         return np.minimum(lo, mid) - extra, mid, np.maximum(hi, mid) + extra
 
     def to_dict(self) -> dict:
