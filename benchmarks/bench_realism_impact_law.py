@@ -25,6 +25,15 @@ law so that the impact law is scored on its own:
   and the worst wall are printed, overall and by the span of the pooled speeds
   (fastest / slowest impact: below about 1.15 a falling r and a constant one fit the
   same data, and the law reports the constant).
+  Beside it, where the prediction is *identified*: the law's band
+  (:meth:`~vidiscover.discovery.ImpactLawResult.band`, which widens outside the
+  observed speeds by the speed dependence too small to report, and is infinite
+  beyond a single speed cluster) has a half-width within 0.03. The share within 0.03
+  counted over those impacts only is printed, with how many walls have none
+  identified, and (with bootstrap resamples) whether the true r lies inside the band.
+  A law that reports a constant over a narrow span and says that it does not know r
+  at 1.4 times the speed is honest; one whose band is narrow and wrong is not. The
+  target line is the strict share.
 
 Figures are quoted on the ``holdout2`` split (see :mod:`vidiscover.corpus`);
 ``--split dev`` is for tuning. A case whose simulation or analysis fails is listed,
@@ -161,12 +170,39 @@ def score_hunt_crossley(case, n_boot: int, tables: dict) -> list[dict]:
             continue
         err = law.predict(v[keep]) - r[keep]
         rms = float(np.sqrt(np.mean(err ** 2)))
+        half, inside = band_half_width(law, v[keep], r[keep])
+        ident = half <= R_TOL
+        rms_id = float(np.sqrt(np.mean(err[ident] ** 2))) if ident.any() else float("nan")
         rows.append({"name": case.name, "side": side, "n": int(law.n), "kind": law.kind,
                      "formula": law.formula, "n_pred": int(keep.sum()),
                      "b_pred": truth["b_pred"], "beyond": float(v[keep].max() / v_max),
                      "span": v_max / float(law.speed_range[0]),
-                     "rms": rms, "ok": bool(rms <= R_TOL)})
+                     "rms": rms, "ok": bool(rms <= R_TOL),
+                     "half": float(np.max(half)), "n_ident": int(ident.sum()),
+                     "ok_ident": bool(rms_id <= R_TOL) if ident.any() else None,
+                     "inside": inside})
     return rows
+
+
+def band_half_width(law, v: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, bool | None]:
+    """Half-width of the law's band at speeds ``v`` and whether ``r`` lies inside it.
+
+    The band (:meth:`~vidiscover.discovery.ImpactLawResult.band`) is the bootstrap's
+    beyond the extrapolation margin ``effect_threshold x distance / span`` (a speed
+    dependence too small to report may continue outside the observed speeds). Without
+    bootstrap resamples (``--n-boot 0``) only that margin is known: the half-width is
+    then the margin alone (0 inside the observed speeds) and ``inside`` is None. One
+    speed cluster tells no speed dependence: infinite outside the observed speeds.
+    """
+    lo, mid, hi = law.band(v)
+    if np.all(np.isfinite(lo)) and np.all(np.isfinite(hi)):
+        return np.maximum(hi - mid, mid - lo), bool(np.all((r >= lo) & (r <= hi)))
+    v0, v1 = law.speed_range
+    dist = np.maximum(v0 - v, 0.0) + np.maximum(v - v1, 0.0)
+    thr = law.effect_threshold
+    if np.isinf(thr):   # one speed cluster: no speed dependence told, r not identified
+        return np.where(dist > 0.0, np.inf, 0.0), None
+    return (thr if np.isfinite(thr) else 0.0) * dist / max(v1 - v0, 1e-12), None
 
 
 def main() -> None:
@@ -204,7 +240,8 @@ def main() -> None:
         for r in h_rows:
             print(f"  {r['name']} {r['side']:<5} HC  n {r['n']:4d} {r['formula']:<40} "
                   f"b x {r['b_pred']:.2f}: {r['n_pred']} impacts up to {r['beyond']:.2f} x v_max: "
-                  f"rms {r['rms']:.4f} {'ok' if r['ok'] else 'MISS'}", flush=True)
+                  f"rms {r['rms']:.4f} {'ok' if r['ok'] else 'MISS'}; band half-width up to "
+                  f"{r['half']:.3f}", flush=True)
         print(f"    ({time.perf_counter() - t0:.1f} s)", flush=True)
     share_c = float(np.mean([r["constant"] for r in const])) if const else float("nan")
     share_h = float(np.mean([r["ok"] for r in hc])) if hc else float("nan")
@@ -224,6 +261,19 @@ def main() -> None:
         share = np.mean([r["ok"] for r in rows]) if rows else float("nan")
         print(f"  pooled speeds spanning {lo:g}-{hi:g} x (fastest / slowest impact): "
               f"{len(rows)} walls, within {R_TOL} {share:.3f}")
+    # the band says where a prediction is identified: where its half-width is within
+    # R_TOL; a prediction counts there only (the strict share above counts all)
+    ident = [r for r in hc if r["n_ident"] > 0]
+    full = sum(r["n_ident"] == r["n_pred"] for r in hc)
+    print(f"  band half-width <= {R_TOL} (prediction identified) at every predicted impact "
+          f"of {full} walls, at some of {len(ident) - full} more, at none of "
+          f"{len(hc) - len(ident)}; within {R_TOL} where identified: "
+          f"{np.mean([r['ok_ident'] for r in ident]) if ident else float('nan'):.3f} "
+          f"of {len(ident)} walls")
+    cover = [r["inside"] for r in hc if r["inside"] is not None]
+    if cover:
+        print(f"  true r inside the 95 % band at every predicted impact: "
+              f"{np.mean(cover):.3f} of {len(cover)} walls")
     print(f"failed cases: {len(failed)} {failed}")
     print("\nmeasured vs target:")
     print(f"  {'constant-r walls reported constant':<46} {share_c:8.3f}  target >= "
