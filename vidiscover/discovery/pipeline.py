@@ -298,22 +298,28 @@ def _workers_for(n_jobs: int | None, width: int, *, fitting: bool) -> WorkerPool
         else:
             _analysis_imports()
         # forked now, before this process starts a thread of its own (the bar's)
-        return WorkerPool(workers, warm_up=None if fitting else _keep_freed_memory)
+        return WorkerPool(workers, warm_up=None if fitting else _analyst_start)
     return WorkerPool(0)
 
 
-def _keep_freed_memory() -> None:
-    """Warm-up of an analysis worker: glibc keeps the memory freed for reuse.
+def _analyst_start() -> None:
+    """Warm-up of an analysis worker: less memory and garbage-collector churn.
 
-    An analysis allocates and frees arrays of a few hundred kB to a few MB thousands
-    of times; by default glibc maps each afresh and unmaps it when freed, so that
-    every page is faulted in again (25-35 thousand page faults an analysis).
-    Served from the heap and not given back (the worker is short-lived), the pages
-    are reused: about 9 thousand faults, 8 % less CPU an analysis. No effect on the
-    results; skipped where the C library is not glibc.
+    * glibc keeps the memory freed for reuse: an analysis allocates and frees arrays
+      of a few hundred kB to a few MB thousands of times, which by default glibc maps
+      afresh and unmaps when freed, so that every page is faulted in again (25-35
+      thousand page faults an analysis); served from the heap and kept (the worker is
+      short-lived), the pages are reused: about 9 thousand faults, 8 % less CPU;
+    * the objects inherited from this process (modules, the recordings) are frozen
+      (:func:`gc.freeze`): the collector's full passes no longer walk them (nor copy
+      their pages), about 5 % less CPU an analysis.
+
+    No effect on the results; the first is skipped where the C library is not glibc.
     """
     import ctypes
+    import gc
 
+    gc.freeze()
     try:
         libc = ctypes.CDLL("libc.so.6")
         libc.mallopt(-3, 32 << 20)       # M_MMAP_THRESHOLD: blocks below 32 MB on the heap
