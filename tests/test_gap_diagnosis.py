@@ -215,7 +215,7 @@ def test_effects_tied_without_the_laser_statistics_are_ranked_again_with_them():
 
     from vidiscover.effects import Effects
     from vidiscover.gap.components import without
-    from vidiscover.gap.diagnose import TIE, _laser_tie, build_model
+    from vidiscover.gap.diagnose import SIGNIFICANT_DROP, TIE, _laser_tie, build_model
     from vidiscover.gap.fit import CandidateFit
 
     built = build_model(recording(0.015)[0])
@@ -235,11 +235,18 @@ def test_effects_tied_without_the_laser_statistics_are_ranked_again_with_them():
     assert clearance.score == tilt.score
     assert _laser_tie(plain, [clearance, tilt])[0] is tilt
     assert _laser_tie(plain, [tilt, clearance])[0] is tilt
+
+    def leaving(f, g):
+        return dataclasses.replace(f, gap=dataclasses.replace(
+            f.gap, per_stat={**f.gap.per_stat, "flights.direction": g}))
+
     # not tied: a score TIE or more behind stays behind
-    behind = dataclasses.replace(tilt, gap=dataclasses.replace(
-        tilt.gap, per_stat={**tilt.gap.per_stat, "flights.direction": TIE}))
+    behind = leaving(tilt, TIE)
     assert behind.score >= clearance.score + TIE
     assert _laser_tie(plain, [clearance, behind])[0] is clearance
+    # both leaving a significant gap: a pair search follows, and decides
+    far = [leaving(clearance, SIGNIFICANT_DROP), leaving(tilt, SIGNIFICANT_DROP)]
+    assert _laser_tie(plain, far)[0] is far[0]
     # the laser statistics already in the scores (second look): nothing to rank again
     seen = dataclasses.replace(plain, real=real)
     assert _laser_tie(seen, [clearance, tilt])[0] is clearance

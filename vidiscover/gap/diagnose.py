@@ -950,12 +950,20 @@ def _laser_tie(model: Model, fits: list[CandidateFit]) -> list[CandidateFit]:
     draws 1618, 2236, 27182, 31415, 7001, 7919, 9191: seven had a second effect within
     1 of the best; only 7001 #15 changes (to the true tilt); the true tilts with a
     runner-up 0.3-1.0 behind keep their verdict (gaps with the laser statistics
-    0.9-2.5 against the runner-up's 3.8-9.6). A larger tie would not be safe: 31415 #3, a true tilt 2.2 ahead of
-    constants per wall, reads worse than them on the laser statistics.
+    0.9-2.5 against the runner-up's 3.8-9.6). A larger tie would not be safe: 31415
+    #3, a true tilt 2.2 ahead of constants per wall, reads worse than them on the
+    laser statistics.
+
+    Only where the best effect leaves less than :data:`SIGNIFICANT_DROP` (no pair
+    search follows: the single effect is the answer). Where it leaves more, a tie of 1
+    is no tie (spent draw 7919 #11, asym + tilt at 6.3 mm: tilt 3632.0 and constants
+    per wall 3632.3 left of 4004; re-ranked, the pair search started from the walls
+    and named a clearance error instead of the tilt), and the pairs decide.
     """
-    if len(fits) < 2 or model.full is None or model.real is model.full:
+    best = fits[0] if fits else None
+    if (len(fits) < 2 or model.full is None or model.real is model.full
+            or best.gap.total >= SIGNIFICANT_DROP):
         return fits
-    best = fits[0]
     nested = {best.name, NESTED.get(best.name)} | {k for k, v in NESTED.items()
                                                    if v == best.name}
     tied = [best] + [f for f in fits[1:]
