@@ -110,7 +110,7 @@ out-of-catalogue 6/6, shrink 0.997, pairs 4/6, coverage 0.953: a compliant frict
 interval now undetermined, the same without the change). Spent 7001 + 7919, ``--drawn
 16``, before (207175d) -> after: top-1 20/24 -> 22/24 (7001 #15; 7919 #5 by the
 analysis' changes meanwhile), none 4/4, pairs 2/4 -> 2/4 (7919 #11 kept by the < 4
-limit), coverage 26/32 -> 28/35. Seed-0 pairs missed: a no-impact orbit (walls
+limit), coverage 26/32 -> 29/36 (#11 re-run alone). Seed-0 pairs missed: a no-impact orbit (walls
 unseen) and the compliant chaotic asym+tilt at 10 mm, where the true tilt fitted with
 the walls leaves 3.86 against the walls' 3.81 alone (an information limit, not the
 search). Speed laws in 2ipc_asym orbits named asym are an estimator gap: the true law
