@@ -29,6 +29,7 @@ from pathlib import Path
 import click
 
 from ..cli import (
+    _OWN_PROCESS,
     OUT_DIR_HELP,
     channels_option,
     check_out_dir,
@@ -137,6 +138,10 @@ def run_discover(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
     out = check_out_dir(out)
     # check all inputs first
     recordings = [read_recording(p, meta=meta, channels=channels) for p in paths]
+    if _OWN_PROCESS[0]:        # the vidiscover process: as short-lived as its workers
+        from ..discovery.pipeline import _worker_start
+
+        _worker_start()
     result = discover_laws(recordings, mu=mu, seed=seed, n_boot=n_boot, level=level,
                            criterion=criterion, flight=flight, progress=progress,
                            min_effect=float(min_effect), max_tilt_deg=float(max_tilt),
