@@ -960,7 +960,7 @@ def discover_impact_law(v, r, *, seed: int = 0, n_boot: int = 200, groups=None,
     common = dict(n_dropped=n_dropped, n_outliers=n_outliers, n_inconsistent=n_inconsistent,
                   rng=rng, n_boot=n_boot,
                   criterion=criterion, level=level, min_effect=min_effect, end_error=ends,
-                  sig=sig, merged=merged_why)
+                  sig=sig, merged=merged_why, form_scatter=form_scatter)
 
     if n == 0:
         return _fallback(v, r, sw, warning=f"no finite impacts{note}: restitution law "
@@ -1136,7 +1136,7 @@ def discover_impact_law(v, r, *, seed: int = 0, n_boot: int = 200, groups=None,
         boot_coefficients=boot,
         effect=float(effects[best]),
         effect_threshold=float(threshold), precision=float(precision), note=why,
-        valid_range=(0.0, v_hi)), sig)
+        valid_range=(0.0, v_hi), form_scatter=float(form_scatter)), sig)
 
 
 def _f_test(design: _Design, r: np.ndarray, alt: _Candidate, rss0: float,
@@ -1442,7 +1442,8 @@ def _fallback(v: np.ndarray, r: np.ndarray, sw: np.ndarray, *, n_dropped: int,
               n_outliers: int, rng: np.random.Generator, n_boot: int, criterion: str,
               level: float, min_effect: float, end_error: float,
               warning: str, sig: np.ndarray | None = None,
-              merged: str | None = None, n_inconsistent: int = 0) -> ImpactLawResult:
+              merged: str | None = None, n_inconsistent: int = 0,
+              form_scatter: float = 0.0) -> ImpactLawResult:
     """Constant law (weighted mean r) with a bootstrap CI, or nothing without impacts."""
     import pandas as pd
 
@@ -1493,7 +1494,8 @@ def _fallback(v: np.ndarray, r: np.ndarray, sw: np.ndarray, *, n_dropped: int,
                                       _above_one(np.array([r0]), sig, precision)) if w),
         boot_coefficients=boot, effect=0.0,
         effect_threshold=_effect_threshold(min_effect, precision, end_error),
-        precision=precision, valid_range=(0.0, CLAIMED_BEYOND * float(v.max()))), sig)
+        precision=precision, valid_range=(0.0, CLAIMED_BEYOND * float(v.max())),
+        form_scatter=float(form_scatter)), sig)
 
 
 def _constrained(res: ImpactLawResult, sig: np.ndarray | None) -> ImpactLawResult:

@@ -188,6 +188,11 @@ class ImpactLawResult:
         (``0 < r <= R_MAX``, :data:`vidiscover.analysis.restitution.R_MAX`): the
         selection takes no law that does not. How far the law is *identified* is
         :attr:`speed_range`; outside it, read :meth:`band`.
+    form_scatter : float
+        Model-form scatter of the r estimates the fit was given (``form_scatter``
+        of :func:`~vidiscover.discovery.impact_law.discover_impact_law`; a compliant
+        wall's in ``discover``), 0 for none: systematic errors that the bootstrap
+        over impacts cannot see; :meth:`band` adds them.
     """
 
     formula: str
@@ -218,6 +223,7 @@ class ImpactLawResult:
     note: str | None = None
     n_inconsistent: int = 0
     valid_range: tuple[float, float] = (math.nan, math.nan)
+    form_scatter: float = 0.0
 
     def __post_init__(self) -> None:
         if self.kind not in RESULT_KINDS:
@@ -280,7 +286,10 @@ class ImpactLawResult:
         the distance (m/s) to the observed range. Where no speed dependence could
         be told at all (the impact speeds form one cluster: an infinite
         :attr:`effect_threshold`), r is not identified outside the observed speeds:
-        the band is infinite there (None in :meth:`to_dict`).
+        the band is infinite there (None in :meth:`to_dict`). A model-form
+        scatter (:attr:`form_scatter`, what repeats at every impact of a speed and
+        the bootstrap over impacts cannot see) widens the band everywhere by its
+        normal quantile at ``level`` times it (1.96 x at 95 %).
 
         Parameters
         ----------
@@ -314,6 +323,10 @@ class ImpactLawResult:
             extra = np.where(dist > 0.0, math.inf, 0.0)
         else:
             extra = (thr if math.isfinite(thr) else 0.0) * dist / span
+        if self.form_scatter > 0.0:
+            from scipy.stats import norm
+
+            extra = extra + float(norm.ppf(0.5 + level / 2.0)) * self.form_scatter
         return np.minimum(lo, mid) - extra, mid, np.maximum(hi, mid) + extra
 
     def to_dict(self) -> dict:
@@ -347,6 +360,7 @@ class ImpactLawResult:
             "n_boot": int(self.boot_coefficients.shape[0]),
             "effect": _num(self.effect), "effect_threshold": _num(self.effect_threshold),
             "precision": _num(self.precision), "note": self.note,
+            "form_scatter": _num(self.form_scatter),
             "band": {k: ([_num(x) for x in val] if isinstance(val, list) else val)
                      for k, val in self.band_table().items()},
             "warning": self.warning, "candidates": cands,
