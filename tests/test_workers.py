@@ -120,3 +120,36 @@ def test_n_workers_refuses_what_is_not_a_count(bad):
     with pytest.raises(InputError, match="n_jobs must be a positive integer"):
         n_workers(bad)
     assert n_workers(None) >= 1 and n_workers(3) == 3
+
+
+def _alive(pid: int) -> bool:
+    """Whether ``pid`` runs (a zombie waiting for its reaper counts as ended)."""
+    try:
+        with open(f"/proc/{pid}/stat") as f:
+            return f.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except FileNotFoundError:
+        return False
+
+
+@forking
+def test_a_worker_ends_with_its_parent_however_the_parent_ends(tmp_path):
+    # a parent interrupted alone (kill -INT of its pid, not of the group) used to leave
+    # its workers blocked forever; here the parent leaves without any cleanup at all
+    import subprocess
+    import sys
+
+    code = ("import os, time\n"
+            "from vidiscover._workers import WorkerPool\n"
+            "pool = WorkerPool(1)\n"
+            "h = pool.submit(os.getpid)\n"
+            "print(h.result(), flush=True)\n"
+            "pool.submit(time.sleep, 60)\n"
+            "time.sleep(0.2)\n"
+            "os._exit(0)\n")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=60, check=True)
+    worker = int(out.stdout.split()[0])
+    deadline = time.monotonic() + 5.0
+    while _alive(worker) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not _alive(worker)

@@ -46,6 +46,25 @@ def can_fork() -> bool:
             and not multiprocessing.current_process().daemon)
 
 
+def _follow_parent(parent: int) -> None:
+    """Make this worker end with the process that forked it (run first in each worker).
+
+    Linux's ``PR_SET_PDEATHSIG`` sends the worker SIGTERM when its parent ends, however
+    it ends (an interrupt sent to the parent alone, a kill, a crash): otherwise a worker
+    blocked writing a result nobody reads would wait forever. A parent already gone
+    before the call ends the worker at once.
+    """
+    import ctypes
+    import signal
+
+    try:
+        ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGTERM))   # PR_SET_PDEATHSIG
+    except (OSError, AttributeError):   # no prctl: the worker ends with its pipe instead
+        pass
+    if os.getppid() != parent:
+        os._exit(1)
+
+
 def fork_executor(max_workers: int):
     """A process pool of ``max_workers`` forks of this process, forked now.
 
@@ -54,7 +73,8 @@ def fork_executor(max_workers: int):
     flushed first, so that no child writes this process's buffered output again.
     Python >= 3.12's warning about forking a process with threads is silenced: the
     only ones at this point are the BLAS library's idle pool, which its own fork
-    handler re-forms in the child. Shut it down with ``shutdown(wait=True)``.
+    handler re-forms in the child. Each worker ends with this process, however it ends
+    (:func:`_follow_parent`). Shut it down with ``shutdown(wait=True)``.
 
     Returns
     -------
@@ -71,7 +91,8 @@ def fork_executor(max_workers: int):
     sys.stdout.flush()
     sys.stderr.flush()
     executor = ProcessPoolExecutor(max_workers=max_workers,
-                                   mp_context=multiprocessing.get_context("fork"))
+                                   mp_context=multiprocessing.get_context("fork"),
+                                   initializer=_follow_parent, initargs=(os.getpid(),))
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message=r".*use of fork\(\) may lead",
                                 category=DeprecationWarning)
