@@ -13,8 +13,14 @@ and after the jump,
   ball chattered into the wall and stuck, so its rebound is not observable. This
   is how chatter is handled: the last *seen* re-impact of a sticking sequence
   gets no r; earlier re-impacts with an observed rebound do count;
-* ``"pulse"``: clipped or missing acceleration samples in the pulse (the LO
-  velocity jump, hence v+, is unreliable);
+* ``"pulse"``: missing acceleration samples in the pulse (the LO velocity jump,
+  hence v+, is unreliable). A pulse clipped at the ADC's rail counts: the detector
+  fits it on its unclipped samples. On the realism corpus's dev/test splits (343
+  such impacts in 25 recordings; 341 pass the other checks) its r was off by a
+  median of 0.003 (90 % within 0.020), as the unclipped impacts' (0.002, 0.013);
+  the two others are 'direction' and 'noisy'. Left out, the fastest
+  impacts of a speed-dependent wall were missing from its RMS (dev-020: r 0.26 of
+  the clipped half against 0.67 of the rest);
 * ``"direction"``: u- does not point into the wall or u+ out of it (a
   reconstruction error; never seen on simulated data);
 * ``"implausible"``: r > :data:`R_MAX` (no wall gives back more than it gets;
@@ -216,7 +222,12 @@ def estimate_restitution(recon: Reconstruction, det: ImpactDetection | None = No
                                                                           np.abs(u_p))
     reliable = np.ones(m, dtype=bool)
     if det is not None and det.n == m:
-        reliable = det.columns["reliable"].astype(bool)
+        # a pulse clipped at the ADC's rail (no missing sample) is fitted on its unclipped
+        # samples: its r counts (see the module docs); missing samples do not
+        cols = det.columns
+        reliable = cols["reliable"].astype(bool)
+        if "clipped" in cols and "dropout" in cols:
+            reliable |= cols["clipped"].astype(bool) & ~cols["dropout"].astype(bool)
     status = np.full(m, "ok", dtype="<U11")
     direction_ok = (sgn * u_m > 0) & (sgn * u_p < 0)
     status[~(rel <= max_rel_error)] = "noisy"
