@@ -444,23 +444,44 @@ def _drift(tr, xl, x_raw, ok, fs, window):
     win = max(5, min(win, mean.size if mean.size % 2 else mean.size - 1))
     if mean.size < 5:
         c = np.polyfit(tb, mean, min(1, mean.size - 1)) if mean.size > 1 else np.r_[mean]
-
-        def poly(x):
-            return (np.polyval(c, x),
-                    np.polyval(np.polyder(c), x) if c.size > 1 else np.zeros(x.size))
-
-        return poly
+        return _PolyDrift(c)
     Db, Ddb = _quadratic_smoother(mean, win, h)
+    return _SmoothDrift(tb, Db, Ddb)
 
-    def smooth(x):
+
+class _PolyDrift:
+    """The drift of a short record: a polynomial of degree <= 1.
+
+    A plain object, so that a reconstruction holding it pickles (a sweep's worker
+    sends it back, a benchmark caches it).
+    """
+
+    def __init__(self, c: np.ndarray) -> None:
+        self.c = c
+
+    def __call__(self, x):
+        c = self.c
+        return (np.polyval(c, x),
+                np.polyval(np.polyder(c), x) if c.size > 1 else np.zeros(x.size))
+
+
+class _SmoothDrift:
+    """The smoothed drift at the block centres ``tb``.
+
+    Read between them linearly and beyond the first/last centre along the local slope.
+    A plain object: it pickles (see :class:`_PolyDrift`).
+    """
+
+    def __init__(self, tb: np.ndarray, Db: np.ndarray, Ddb: np.ndarray) -> None:
+        self.tb, self.Db, self.Ddb = tb, Db, Ddb
+
+    def __call__(self, x):
+        tb, Db, Ddb = self.tb, self.Db, self.Ddb
         D = np.interp(x, tb, Db)
         Dd = np.interp(x, tb, Ddb)
-        # beyond the first/last block centre: extrapolate along the local slope
         for sel, k in ((x < tb[0], 0), (x > tb[-1], -1)):
             D[sel] = Db[k] + Ddb[k] * (x[sel] - tb[k])
         return D, Dd
-
-    return smooth
 
 
 @functools.lru_cache(maxsize=8)
