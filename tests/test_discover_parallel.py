@@ -69,3 +69,18 @@ def test_an_error_in_a_worker_reaches_the_caller_as_it_is(friction_recordings, m
     monkeypatch.setattr(pipeline, "analyze", analyze)
     with pytest.raises(InputError, match="recording 2: no impacts found"):
         discover(friction_recordings[:2], n_boot=0, flight=False, n_jobs=n_jobs)
+
+
+@pytest.mark.skipif(not can_fork(), reason="workers are forked (Linux) or not used")
+def test_workers_send_back_analyses_read_in_a_causal_filters_time_frame():
+    """Behind a causal anti-alias filter the LO is read one filter delay later, and the
+    analysis keeps that frame shift; a worker must be able to send it back (it held
+    local functions once, and discover failed with a pickling traceback on such
+    recordings: realism test-033, Chebyshev-8, laser on its rails)."""
+    from vidiscover.corpus import realism_case
+
+    rec = realism_case("test", 33).simulate(label=False).recording
+    one = discover([rec, rec], n_boot=0, flight=False, n_jobs=1)
+    two = discover([rec, rec], n_boot=0, flight=False, n_jobs=2)
+    assert two.analyses[0].reconstruction._shift is not None
+    assert one.summary() == two.summary()
