@@ -3,8 +3,11 @@
 Recordings come from :mod:`vidiscover.corpus` (compliant Kelvin-Voigt / Hunt-Crossley
 walls, regularised friction, tilt, causal anti-alias filters of several kinds, other
 sampling rates, bias/offsets, ADC quantisation, mounted resonance, rigs beyond the
-paper's). Figures are quoted on the held-back ``holdout2`` split (never used for
-tuning; ``test`` and then ``holdout`` were read case by case in earlier stops);
+paper's). Figures are quoted on the held-back ``holdout3`` split (never used for
+tuning; ``test``, ``holdout`` and ``holdout2`` were read case by case in earlier
+stops). Measured (holdout3, 60 cases, run once, 2026-11-26): count within 3 % 0.927
+of 41 periodic cases, precision / recall 0.976 / 0.979, median timing 16 us, r per
+wall within 0.03 0.953 of 106 walls (0.990 against the true r of the impacts used);
 ``--split dev``
 runs the development cases instead.
 
@@ -170,7 +173,7 @@ def _line(name: str, s: dict) -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout2", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout3", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--json", action="store_true")
