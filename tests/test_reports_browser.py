@@ -20,6 +20,7 @@ import functools
 import importlib.util
 import shutil
 import threading
+import time
 import urllib.error
 import urllib.parse
 import urllib.request
@@ -150,6 +151,12 @@ def _visit(driver, url: str) -> dict:
     """Open ``url`` and return what a reader would meet there."""
     driver.get_log("browser")                                   # drop earlier messages
     driver.get(url)
+    # a busy machine (CI's two test workers) may return from get() before every figure
+    # has arrived: wait for them (up to 20 s) instead of reading a half-loaded page
+    deadline = time.monotonic() + 20.0
+    while (not driver.execute_script("return Array.from(document.images).every(i => i.complete)")
+           and time.monotonic() < deadline):
+        time.sleep(0.1)
     images = driver.execute_script(
         "return Array.from(document.images).map(i => "
         "[(i.getAttribute('src') || '').slice(0, 60), i.complete, i.naturalWidth])")
