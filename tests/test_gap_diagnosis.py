@@ -545,3 +545,21 @@ def test_a_tilt_tied_with_a_clearance_error_is_named_by_the_laser_statistics():
     assert abs(score["clearance_error"] - score["inclination"]) < TIE
     assert rep.verdict == "inclination"
     assert rep.selected[0].params["theta"] == pytest.approx(3.53, abs=0.3)
+
+
+@pytest.mark.slow
+def test_a_speed_law_at_one_speed_per_wall_gets_its_slopes_searched():
+    # drawn case 7919 #1: a law per wall in a 2ipc_asym orbit, each wall hit at one
+    # speed (spread 2e-4). The regression sees no slope; zero slopes at the recording's
+    # r per wall land on another attractor (left 296) while the slope, which decides
+    # which orbit is stable, is searched and reaches the recording's (before: 296)
+    from vidiscover.gap.battery import case_recording, drawn_cases
+    from vidiscover.gap.diagnose import nominal_model
+    from vidiscover.gap.fit import fit_candidate
+
+    rec, _ = case_recording(drawn_cases(7919, 24)[1])
+    model, nominal, _ = nominal_model(rec)
+    fit = fit_candidate(model, "velocity_dependent_restitution")
+    slopes = [float(fit.params[s].split(":")[2]) for s in ("right", "left")]
+    assert all(a > 0 for a in slopes)                 # 0.16, 0.51 (truth 0.344, 0.522)
+    assert fit.gap.total < 1.0                        # 0.16 (asym: 291)
