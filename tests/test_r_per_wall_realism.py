@@ -94,6 +94,8 @@ def test_a_saturated_laser_does_not_pin_the_lo_to_its_rails():
     wall kept fewer than 10 impacts (the others 'noisy') and the left's r was off by
     -0.023. Left out of the pinning: misfit 0.13 mm, r off by +0.0033 / +0.0024."""
     out, err = _wall_errors("test", 33)
+    assert 0.5 < out.reconstruction.laser_rail_share < 0.8      # 2 of 3 samples on a rail
+    assert any("laser 'x' saturated" in w for w in out.warnings)  # and the user is told
     assert out.reconstruction.position_noise < 0.2e-3           # measured 0.13 mm, was 2.7
     assert abs(err["right"]) < 0.006 and abs(err["left"]) < 0.006   # 0.0033 / 0.0024
 

@@ -252,6 +252,10 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None,
     if forcing.source != "xe":
         warnings.append("base displacement 'xe' has no usable sine: cycles are cut with the "
                         "metadata frequency and phase 0")
+    if recon.laser_rail_share > 0:
+        warnings.append(f"laser 'x' saturated on {100 * recon.laser_rail_share:.0f} % of its "
+                        "samples (its extreme value, held): those samples are left out of "
+                        "the LO's pinning; use a laser range that covers the LO's motion")
     for w in (rest.right, rest.left):
         if w.warn_slow:
             warnings.append(f"{w.side} wall: the ball is too slow for the friction "

@@ -127,6 +127,10 @@ class Reconstruction:
         Robust RMS of laser minus reconstructed LO displacement (m), the ball
         position uncertainty used by stage 3 (the laser read :func:`lo_lag` later,
         against the LO of the impacts' frame).
+    laser_rail_share : float
+        Share of the laser's finite samples on its rails (its extreme value, held for
+        several samples: driven past its range); those samples do not pin the LO of the
+        impacts' frame. 0 when the laser never saturates.
     """
 
     t: np.ndarray = field(repr=False)
@@ -138,6 +142,7 @@ class Reconstruction:
     b: float
     mu: float
     position_noise: float
+    laser_rail_share: float = 0.0
     _traj: dict = field(default_factory=dict, repr=False)
     _shift: object = field(default=None, repr=False)
 
@@ -393,7 +398,10 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
                               exits[3])
     return Reconstruction(t=t, x=x_f, v=v_f, v_disp=v_disp, impact_columns=impacts,
                           flight_columns=flights, b=b, mu=float(mu),
-                          position_noise=float(position_noise), _traj=traj, _shift=shift)
+                          position_noise=float(position_noise),
+                          laser_rail_share=0.0 if rails is None else
+                          float(rails.sum() / max(int(okx.sum()), 1)),
+                          _traj=traj, _shift=shift)
 
 
 def _gradient(y: np.ndarray, h: float) -> np.ndarray:
@@ -577,7 +585,8 @@ def refly(recon: Reconstruction, det: ImpactDetection, mu: float, *,
                               ic["v_plus"], dv, flights, exits[3])
     return Reconstruction(t=t, x=recon.x, v=v, v_disp=recon.v_disp, impact_columns=impacts,
                           flight_columns=flights, b=b, mu=float(mu),
-                          position_noise=recon.position_noise, _traj=traj, _shift=shift)
+                          position_noise=recon.position_noise,
+                          laser_rail_share=recon.laser_rail_share, _traj=traj, _shift=shift)
 
 
 def _impact_columns(t_imp, side_names, x_imp, y_imp, v_minus, v_plus, dv, flights,
