@@ -6,7 +6,7 @@ import gc
 
 import pytest
 
-from vidiscover.discovery.pipeline import _gc_paused
+from vidiscover._workers import gc_paused as _gc_paused
 
 
 @pytest.mark.parametrize("enabled", [True, False])

@@ -37,11 +37,10 @@ Several recordings are pooled: each is analysed by :func:`vidiscover.analysis.an
 
 from __future__ import annotations
 
-import contextlib
 import gc
 import math
 import os
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -50,7 +49,7 @@ import numpy as np
 import pandas as pd
 
 from .._atomic import to_jsonable
-from .._workers import WorkerPool, can_fork, n_workers
+from .._workers import WorkerPool, can_fork, gc_paused, n_workers
 from ..analysis import AnalysisResult, DetectionOptions, analyze
 from ..analysis.reconstruction import contact_durations
 from ..errors import InputError
@@ -336,27 +335,10 @@ def _fitting_imports() -> None:
 
     About 0.5-1 s: pysindy brings scikit-learn and scipy.stats.
     """
-    with _gc_paused():
+    with gc_paused():
         import pysindy  # noqa: F401
         import scipy.optimize  # noqa: F401
         import scipy.special  # noqa: F401
-
-
-@contextlib.contextmanager
-def _gc_paused() -> Iterator[None]:
-    """The cyclic garbage collector off for a block of imports, as it was after it.
-
-    Importing a library stack makes hundreds of thousands of objects that are kept
-    (modules, classes, functions), and the collector walks them again and again to
-    find none to free: about 8 % of the CPU of importing pandas, scipy and pysindy.
-    """
-    was = gc.isenabled()
-    gc.disable()
-    try:
-        yield
-    finally:
-        if was:
-            gc.enable()
 
 
 def _analysis_imports() -> None:
@@ -365,7 +347,7 @@ def _analysis_imports() -> None:
     Loaded once before the analysts fork rather than once in each of them; the
     fitting libraries load most of these modules anyway.
     """
-    with _gc_paused():
+    with gc_paused():
         import scipy.cluster.hierarchy  # noqa: F401
         import scipy.linalg  # noqa: F401
         import scipy.optimize  # noqa: F401
