@@ -478,11 +478,16 @@ def _fit_asymmetric(model: Model, base: Effects):
     return p, 2, model.params.r, n
 
 
+def _no_slope(v: np.ndarray) -> bool:
+    """Whether a wall's impact speeds ``v`` show no slope of r: too few, or no spread."""
+    return v.size < 8 or np.std(v) < 0.05 * max(np.mean(v), 1e-9)
+
+
 def _wall_law(imp: dict, sgn: int, fallback: float) -> tuple[float, float]:
     """(r0, a) of r = r0 - a v on one wall, within the registry's r0 in [0, 1], a >= 0."""
     sel = imp["side"] == sgn
     v, r = imp["speed"][sel], imp["r"][sel]
-    if v.size < 8 or np.std(v) < 0.05 * max(np.mean(v), 1e-9):
+    if _no_slope(v):
         return (float(np.sqrt(np.mean(r ** 2))) if r.size else fallback), 0.0
     a, c = np.polyfit(v, r, 1)
     a = -float(a)
@@ -507,10 +512,12 @@ SLOPE_FRACTIONS = (0.0, 1.0 / 3.0, 2.0 / 3.0, 1.0)
 
 
 def _one_speed(imp: dict, sgn: int) -> float | None:
-    """Mean impact speed of a wall hit at one speed (enough impacts, no spread), else None."""
-    sel = imp["side"] == sgn
-    v = imp["speed"][sel]
-    if v.size < 8 or not np.mean(v) > 0 or np.std(v) >= 0.05 * np.mean(v):
+    """Mean impact speed of a wall hit at one speed (enough impacts, no spread), else None.
+
+    The walls :func:`_wall_law` gives no slope for lack of spread (:func:`_no_slope`).
+    """
+    v = imp["speed"][imp["side"] == sgn]
+    if v.size < 8 or not np.mean(v) >= 1e-9 or not _no_slope(v):
         return None
     return float(np.mean(v))
 
