@@ -46,6 +46,7 @@ from .fit import (
     signature_item,
     symmetric,
     validation_items,
+    walls_at_one_speed,
 )
 
 __all__ = ["GapReport", "diagnose", "build_model", "nominal_model", "SIGNIFICANT_GAP",
@@ -73,13 +74,6 @@ NULL_GAP = 1.0
 #: ``PARSIMONY`` times the richer one's (plus the penalty difference).
 NESTED = {"velocity_dependent_restitution": "asymmetric_restitution"}
 PARSIMONY = 1.25
-#: Largest spread of a wall's recorded impact speeds ((90th - 10th percentile) / median)
-#: at which a restitution law per wall cannot be told from a constant per wall. On the
-#: asym and law cases of draws 5-8, 42, 4242, 27182, 31415, 1618 and 2236 (40), the
-#: 2ipc_asym speed laws (one impact per wall and cycle: 1618 #1 and #13, 42 #13, 4242
-#: #13, all answered asym) read 0.000-0.033 on their wider wall; every other case reads
-#: 0.22 or more there (multi_ipc and chaotic orbits; a 2ipc_asym asym case 0.29).
-ONE_SPEED = 0.1
 #: Nominal-model replicates used for the noise scales.
 N_REPLICATES = 4
 #: A second effect is kept only if it removes this share of the remaining gap.
@@ -170,18 +164,19 @@ class GapReport:
         """Catalogue effects the recording cannot tell from the verdict.
 
         Constants per wall (``asymmetric_restitution``) named, alone or in a pair,
-        where every wall's impacts come at one speed (:data:`ONE_SPEED`): a restitution
-        law per wall (``velocity_dependent_restitution``) gives the same r at that
-        speed, so it is not excluded -- the parsimonious name is given, not a proof
-        against the law. (In a pair too: fresh seed 7919 #1 and #13, speed laws in
-        2ipc_asym orbits, were named constants per wall plus a clearance error.)
+        where every wall's impacts come at one speed
+        (:func:`~vidiscover.gap.fit.walls_at_one_speed`: the test by which the law's fit
+        reads no slope and searches it instead): a restitution law per wall
+        (``velocity_dependent_restitution``) gives the same r at that speed, so it is
+        not excluded -- the parsimonious name is given, not a proof against the law.
+        (In a pair too: fresh seed 7919 #1 and #13, speed laws in 2ipc_asym orbits, were
+        named constants per wall plus a clearance error.)
         """
         [(rich, simple)] = NESTED.items()
         named = [c.name for c in self.selected] if self.confident else []
         if not self.significant or simple not in named:
             return []
-        spread = _speed_spread(self.model.real)
-        return [rich] if spread is not None and spread < ONE_SPEED else []
+        return [rich] if walls_at_one_speed(self.model.real.impacts) else []
 
     def attributed(self) -> list[dict]:
         """Selected effects with the share of the nominal gap each removed.
@@ -253,23 +248,6 @@ class GapReport:
             "n_sims": self.n_sims,
             "refined": self.model.refine,
         })
-
-
-def _speed_spread(real) -> float | None:
-    """Largest spread of a wall's impact speeds, (90th - 10th percentile) / median.
-
-    None when a wall has fewer than 3 impacts.
-    """
-    imp = real.impacts
-    speed, side = np.asarray(imp["speed"], dtype=float), np.asarray(imp["side"])
-    out = 0.0
-    for sgn in (1, -1):
-        v = speed[side == sgn]
-        if v.size < 3:
-            return None
-        q10, q50, q90 = np.quantile(v, (0.1, 0.5, 0.9))
-        out = max(out, float((q90 - q10) / q50))
-    return out
 
 
 def _shrink(before: float, after: float) -> float:
