@@ -136,7 +136,7 @@ def main() -> None:
     from vidiscover import Effects, preset
     from vidiscover.commands.gap import human_check
     from vidiscover.gap import diagnose, gap_check
-    from vidiscover.gap.battery import CASES_CI, drawn_cases
+    from vidiscover.gap.battery import CASES_CI, DETECTABLE, drawn_cases
     from vidiscover.workflows import simulate_to_memory
 
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
@@ -153,6 +153,9 @@ def main() -> None:
     ap.add_argument("--time", action="store_true", help="also time one diagnosis")
     ap.add_argument("--json", default=None, help="write the battery result here")
     ap.add_argument("--calibrate", action="store_true", help="recompute the model-form scales")
+    ap.add_argument("--no-detect", action="store_true",
+                    help="skip the detectability of the withheld effects (one simulation "
+                         "and analysis per effect of each catalogue case)")
     args = ap.parse_args()
 
     if args.calibrate:
@@ -186,8 +189,21 @@ def main() -> None:
     if args.drawn:
         cases = drawn_cases(args.seed, args.drawn)
     res = gap_check(quick=args.quick, seed=args.seed, n_jobs=args.n_jobs, progress=True,
-                    cases=cases)
+                    cases=cases, detect=not args.no_detect)
     print(human_check(res))
+    if res.get("n_detectability_measured"):
+        def f3(v):
+            return "n/a" if v is None else f"{v:.3f}"
+
+        print(f"detectable cases (every withheld effect moves the statistics by >= "
+              f"{DETECTABLE:g} when switched off, battery.detectability; the targets above "
+              f"count all cases): top-1 {f3(res['accuracy_detectable'])} over "
+              f"{res['n_catalogue_detectable']}, pairs both named "
+              f"{f3(res['pair_both_named_detectable'])} over {res['n_pair_detectable']}")
+        for u in res["undetectable"]:
+            fx = ", ".join(f"{k} {v:.2f}" for k, v in u["detectable"].items())
+            print(f"  undetectable: {u['effect']} {u['spec']} at {u['b'] * 1e3:.1f} mm "
+                  f"({u['regime']}): {fx}; said {u['predicted']}")
     n = res["n_catalogue_cases"]
     print(f"catalogue cases: {n} ({'MET' if n >= 40 else 'MISSED'}: target >= 40 for the "
           f"accuracy target to be quoted)")

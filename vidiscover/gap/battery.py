@@ -25,10 +25,24 @@ identifiability limits of the physics shape the list and the verdicts:
   (``flights.drag``, :mod:`.components`) is what tells them apart;
 * a restitution effect is unobservable in a recording without impacts (a
   two-effect case whose motion ends up impact-free can name only the other one).
+
+Whether a withheld effect leaves a trace in the recording is measured, by one rule for
+every catalogue case (:func:`detectability`, ``gap_check(detect=True)``, on by default in
+``benchmarks/bench_gap.py``): the case is simulated again with that effect switched off
+(same seed, the other effect and the instrument kept) and the two recordings are
+compared on the diagnosis' statistics and noise scales; an effect that moves them by
+less than :data:`DETECTABLE` is below what the data can show. The targets count every
+case; the figures over the cases whose every effect is detectable are quoted beside
+them (``accuracy_detectable``, ``pair_both_named_detectable``, ``undetectable``). The
+rule switches effects off one at a time: an effect that the refit of the other can
+absorb (a tilt behind compliant walls in a chaotic orbit, seed-0 #79: 9.8 when switched
+off) still counts as detectable.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import functools
 import math
 import time
 from dataclasses import dataclass
@@ -41,7 +55,8 @@ from .diagnose import _clean
 
 __all__ = ["Case", "CASES_FULL", "CASES_QUICK", "CASES_CI", "CASES_EXTRA", "extra_cases",
            "drawn_cases", "case_recording",
-           "TARGETS", "battery_cases", "run_case", "gap_check", "summarise", "verdicts"]
+           "TARGETS", "battery_cases", "run_case", "gap_check", "summarise", "verdicts",
+           "DETECTABLE", "case_without", "detectability"]
 
 #: Restitution of both walls in the simulated "real" recordings (unless an effect sets it).
 BASE_R = 0.7
@@ -367,8 +382,63 @@ def case_recording(case: Case) -> tuple:
     return rec, truth
 
 
-def run_case(case: Case) -> dict:
-    """Simulate one case, diagnose it (in-process) and score the verdict."""
+#: Smallest change of the gap statistics (in the diagnosis' units: squared differences
+#: over the noise scales of the nominal model) that switching one effect of a case off
+#: makes for that effect to count as detectable (:func:`detectability`): the diagnosis'
+#: own bar for a single effect (:data:`~vidiscover.gap.diagnose.SIGNIFICANT_DROP`).
+DETECTABLE = 4.0
+
+
+def case_without(case: Case, name: str) -> Case:
+    """The case with catalogue effect ``name`` switched off, all else the same.
+
+    An ``--effect`` string is dropped; a restitution effect made by compliant walls
+    (unequal or Hunt-Crossley walls, no ``--effect`` string) gives way to equal
+    Kelvin-Voigt walls at :data:`BASE_R` (the exact cases' nominal walls), of the
+    battery's stiffness (3e7 N/m). Seed, clearance, rig and instrument are kept.
+    """
+    spec = tuple(x for x in case.spec if x.split("=", 1)[0] != name)
+    contact = case.contact
+    if len(spec) == len(case.spec) and name in ("asymmetric_restitution",
+                                                "velocity_dependent_restitution"):
+        contact = (f"kelvin-voigt:k=3e7,r={BASE_R}",)
+    rest = [e for e in case.effects if e != name]
+    return dataclasses.replace(case, effect="+".join(rest) or "none", spec=spec,
+                               contact=contact)
+
+
+def detectability(case: Case, model) -> dict[str, float]:
+    """How far each withheld effect of a catalogue case moves the recording's statistics.
+
+    Effect -> the gap between the case's recording and the same case simulated without
+    that effect (:func:`case_without`: same seed, noise, other effect and instrument),
+    on the statistics and noise scales the diagnosis judged the recording on
+    (``model``: its nominal :class:`~vidiscover.gap.fit.Model`). Below
+    :data:`DETECTABLE` the effect leaves no significant trace in what the sensors
+    record -- a restitution effect in an orbit without impacts reads 0 -- and no
+    diagnosis from these statistics can be asked to name it. One simulation and one
+    analysis per effect; the rule is the same for every case and does not look at
+    the verdict.
+    """
+    from .components import LASER_STATS, compare, without
+    from .diagnose import build_model
+
+    out = {}
+    for name in case.effects:
+        rec, _ = case_recording(case_without(case, name))
+        sig = build_model(rec).real
+        if model.full is not None and model.real is not model.full:
+            sig = without(sig, LASER_STATS)            # the statistics the diagnosis used
+        out[name] = float(compare(model.real, sig, model.rep_var).total)
+    return out
+
+
+def run_case(case: Case, detect: bool = False) -> dict:
+    """Simulate one case, diagnose it (in-process) and score the verdict.
+
+    ``detect``: also measure how detectable each withheld effect is
+    (:func:`detectability`, key ``detectable``).
+    """
     from .diagnose import diagnose
 
     t0, c0 = time.perf_counter(), time.process_time()
@@ -413,6 +483,8 @@ def run_case(case: Case) -> dict:
         "runner_up": rep.candidates[1].name if len(rep.candidates) > 1 else None,
         "time_s": time.perf_counter() - t0, "cpu_s": time.process_time() - c0,
         "n_sims": rep.n_sims, "refined": d["refined"],
+        "detectable": (detectability(case, rep.model)
+                       if detect and case.kind == "catalogue" else None),
     }
 
 
@@ -444,6 +516,17 @@ def summarise(rows: list[dict]) -> dict:
     def share(sel, key="correct"):
         return float(np.mean([bool(r[key]) for r in sel])) if sel else math.nan
 
+    # the figures over the cases whose every withheld effect is detectable
+    # (detectability), where it was measured; the targets are quoted on all cases
+    def seen(r):
+        d = r.get("detectable")
+        return d is not None and all(g >= DETECTABLE for g in d.values())
+
+    measured = [r for r in cat + pairs if r.get("detectable") is not None]
+    cat_seen = [r for r in cat if seen(r)]
+    pairs_seen = [r for r in pairs if seen(r)]
+    both_seen = [set(r["effect"].split("+")) <= set(r.get("named", [])) for r in pairs_seen]
+
     return {
         "accuracy": share(cat),
         "n_catalogue_cases": len(cat),
@@ -468,6 +551,15 @@ def summarise(rows: list[dict]) -> dict:
                           "n_none_cases": sum(r.get("engine", "exact") == e for r in none)}
                       for e in ("exact", "compliant")},
         "confusion": confusion,
+        "n_detectability_measured": len(measured),
+        "undetectable": [{"effect": r["effect"], "b": r["b"], "spec": r["spec"],
+                          "regime": r["regime"], "detectable": r["detectable"],
+                          "predicted": r["predicted"]}
+                         for r in measured if not seen(r)],
+        "accuracy_detectable": share(cat_seen) if measured else math.nan,
+        "n_catalogue_detectable": len(cat_seen),
+        "pair_both_named_detectable": float(np.mean(both_seen)) if both_seen else math.nan,
+        "n_pair_detectable": len(pairs_seen),
     }
 
 
@@ -486,8 +578,8 @@ def verdicts(summary: dict) -> list[dict]:
 
 
 def gap_check(quick: bool = False, seed: int = 0, *, n_jobs: int | None = None,
-              scheduler=None, progress: bool = False, cases: list[Case] | None = None
-              ) -> dict:
+              scheduler=None, progress: bool = False, cases: list[Case] | None = None,
+              detect: bool = False) -> dict:
     """Run the withheld-effect battery.
 
     Parameters
@@ -505,6 +597,11 @@ def gap_check(quick: bool = False, seed: int = 0, *, n_jobs: int | None = None,
         Show a progress bar.
     cases : list of Case, optional
         Explicit cases (overrides ``quick``).
+    detect : bool
+        Also measure each catalogue case's detectability (:func:`detectability`: one
+        simulation and analysis per withheld effect) and quote the figures over the
+        detectable cases beside the targets' (``accuracy_detectable``,
+        ``pair_both_named_detectable``, ``undetectable``).
 
     Returns
     -------
@@ -517,14 +614,15 @@ def gap_check(quick: bool = False, seed: int = 0, *, n_jobs: int | None = None,
         raise InputError(f"seed must be a non-negative integer, was {seed!r}")
     cases = list(cases) if cases is not None else battery_cases(quick, seed)
     t0 = time.perf_counter()
+    one = functools.partial(run_case, detect=True) if detect else run_case
     if n_jobs == 1 and scheduler is None:
         rows = []
         for c in cases:
-            rows.append(run_case(c))
+            rows.append(one(c))
     else:
         from ..scale import parallel_map
 
-        rows = parallel_map(run_case, cases, n_jobs=n_jobs, scheduler=scheduler,
+        rows = parallel_map(one, cases, n_jobs=n_jobs, scheduler=scheduler,
                             progress=progress, desc="gap-check")
     out = summarise(rows)
     out["verdicts"] = verdicts(out)
