@@ -37,7 +37,7 @@ from ..errors import InputError
 from .labels import LABELS
 
 __all__ = ["PARAM_RANGES", "Case", "draw_cases", "draw_realism_cases", "simulate_case",
-           "generate", "feature_context", "probe_rows", "reproduce_row", "M1",
+           "generate", "feature_context", "probe_rows", "probe_mismatch", "reproduce_row", "M1",
            "draw_corpus_cases", "corpus_draw_set"]
 
 #: LO mass of every drawn rig (kg, the paper's); the ball mass follows the mass ratio.
@@ -419,10 +419,15 @@ def generate(n: int, seed: int, *, n_realism: int = 0, min_per_label: int | None
 #: first rows of the paper rig's random draw, of the other rigs and of the corpus.
 PROBE_PER_ORIGIN: Mapping[str, int] = {"random": 8, "realism": 4, "corpus_dev": 2,
                                         "corpus_draw": 1}
-#: Labels of probe rows: periodic or impact-free motions, which rounding cannot move
-#: to another attractor (a chaotic row's features differ at the rounding level between
-#: machines whose libm rounds the last bit differently).
+#: Labels of probe rows: periodic or impact-free motions (a chaotic row's features
+#: differ at the rounding level between machines whose libm rounds the last bit
+#: differently; so does a periodic row with a neighbouring attractor, which
+#: :func:`probe_rows` tries and leaves out).
 PROBE_LABELS = ("no_impact", "1ipc", "2ipc_sym", "2ipc_asym", "multi_ipc")
+#: Tolerance within which a recomputed probe row must match its kept features.
+PROBE_RTOL, PROBE_ATOL = 1e-7, 1e-12
+#: Candidates tried per kept probe row before an origin is left with fewer.
+PROBE_TRIES = 4
 
 
 def probe_rows(data: pd.DataFrame) -> list[dict]:
@@ -444,40 +449,72 @@ def probe_rows(data: pd.DataFrame) -> list[dict]:
               else pd.Series("random", index=data.index))
     out = []
     for kind, k in PROBE_PER_ORIGIN.items():
-        rows = data[(origin == kind) & data["label"].isin(PROBE_LABELS)].head(k)
-        for _, row in rows.iterrows():
-            out.append({
+        rows = data[(origin == kind) & data["label"].isin(PROBE_LABELS)]
+        kept = 0
+        for _, row in rows.head(PROBE_TRIES * k).iterrows():
+            probe = {
                 "origin": kind,
                 "name": row["name"] if isinstance(row.get("name"), str) else "",
                 "params": {c.split(":", 1)[1]: row[c] for c in data.columns
                            if c.startswith("param:") and not _missing(row[c])},
                 "label": str(row["label"]),
                 "features": {c.split(":", 1)[1]: float(row[c]) for c in data.columns
-                             if c.startswith("feature:")}})
+                             if c.startswith("feature:")}}
+            if probe_mismatch(probe, reproduce_row(probe, nudge=True)) is None:
+                out.append(probe)
+                kept += 1
+                if kept == k:
+                    break
     return out
+
+
+def probe_mismatch(probe: Mapping, row: Mapping) -> str | None:
+    """Why a recomputed ``row`` differs from the ``probe`` it should reproduce, or None.
+
+    Features must agree within :data:`PROBE_RTOL` / :data:`PROBE_ATOL` (last-bit libm
+    differences between CPUs), the label exactly.
+    """
+    if row.get("status") != "ok" or row.get("label") != probe["label"]:
+        return f"status {row.get('status')!r}, label {row.get('label')!r} vs {probe['label']!r}"
+    for name, want in probe["features"].items():
+        got = float(row[f"feature:{name}"])
+        if math.isnan(want) != math.isnan(got) or (
+                not math.isnan(want)
+                and abs(got - want) > PROBE_ATOL + PROBE_RTOL * abs(want)):
+            return f"feature {name}: {got!r} vs {want!r}"
+    return None
 
 
 def _missing(v) -> bool:
     return v is None or (isinstance(v, float) and math.isnan(v))
 
 
-def reproduce_row(probe: Mapping) -> dict:
-    """Recompute the training row a :func:`probe_rows` entry was taken from."""
+def reproduce_row(probe: Mapping, *, nudge: bool = False) -> dict:
+    """Recompute the training row a :func:`probe_rows` entry was taken from.
+
+    With ``nudge``, the drive amplitude moves up by one unit in the last place: a row
+    that then changes (a motion with a neighbouring attractor, a detection on a
+    threshold's edge) would change between CPUs too, and is not kept as a probe.
+    """
+    def nudged(case):
+        return replace(case, amplitude=float(np.nextafter(case.amplitude, np.inf))) \
+            if nudge else case
+
     if probe["origin"] == "corpus_dev":
         from ..corpus import realism_case
 
         split, index = probe["name"].rsplit("-", 1)
-        return _corpus_row(realism_case(split, int(index)))
+        return _corpus_row(nudged(realism_case(split, int(index))))
     if probe["origin"] == "corpus_draw":
         from ..corpus import draw_realism_case
 
         split, index = probe["name"].rsplit("-", 1)     # draw{seed}-{index}
         rng = np.random.default_rng([int(split[len("draw"):]), 3, int(index)])
-        return _corpus_row(draw_realism_case(rng, split, int(index)))
+        return _corpus_row(nudged(draw_realism_case(rng, split, int(index))))
     names = {f.name for f in fields(Case)}
     params = {k: _tuples(v) for k, v in probe["params"].items() if k in names}
     params["seed"] = int(params["seed"])        # a float in a table with missing values
-    return simulate_case(Case(**params))
+    return simulate_case(nudged(Case(**params)))
 
 
 def _tuples(v):
