@@ -1342,7 +1342,8 @@ UNESTIMATED_SCATTER = 0.005
 #: Hunt-Crossley instead of ``r0 - a v`` (RMS at the third clearance 2-8 times
 #: smaller); test (not tuned on): Hunt-Crossley walls within 0.03 0.924 -> 0.937, the
 #: constant-r walls unchanged. 2 or 3 times it as the floor there gained dev-085
-#: left and lost dev-072 left.
+#: left and lost dev-072 left. Since 2026-11-26 it is the floor of the fastest speed
+#: cluster; toward the slower ones the floor grows like 1 / v (:data:`FORM_SLOW_GAIN`).
 COMPLIANT_FORM_SCATTER = 0.005
 
 
