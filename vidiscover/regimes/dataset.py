@@ -478,6 +478,7 @@ def probe_mismatch(probe: Mapping, row: Mapping) -> str | None:
         return f"status {row.get('status')!r}, label {row.get('label')!r} vs {probe['label']!r}"
     for name, want in probe["features"].items():
         got = float(row[f"feature:{name}"])
+        want = math.nan if want is None else float(want)       # NaN is null in JSON
         if math.isnan(want) != math.isnan(got) or (
                 not math.isnan(want)
                 and abs(got - want) > PROBE_ATOL + PROBE_RTOL * abs(want)):
