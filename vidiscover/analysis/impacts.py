@@ -77,6 +77,7 @@ from .signals import (
     fill_gaps,
     good_sample,
     noise_sigma,
+    release_freed_memory,
     robust_std,
     savgol_smooth,
     smoother_window,
@@ -343,6 +344,15 @@ def detect_impacts(rec, options: DetectionOptions | None = None, *, pulse=None,
     >>> det.n == truth.impacts.n - int((abs(truth.impacts.dv) < 1e-4).sum())
     True
     """
+    det = _detect(rec, options, pulse=pulse, mu=mu, b=b)
+    # the dozen full-length temporaries are freed now: their pages go back to the system
+    release_freed_memory(8 * det.n_samples)
+    return det
+
+
+def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
+            b: float | None) -> ImpactDetection:
+    """:func:`detect_impacts` (its temporaries all freed on return)."""
     if pulse is not None and not isinstance(pulse, (PulseModel, PulseResponse)):
         raise InputError(f"pulse must be a PulseModel, a PulseResponse or None (learn it), "
                          f"was {pulse!r}")
