@@ -360,3 +360,22 @@ def test_savgol_taps_are_scipys_savgol_coeffs_bit_for_bit(half, polyorder, deriv
     deriv = min(deriv, polyorder)
     want = savgol_coeffs(win, polyorder, deriv=deriv, delta=delta, use=use)
     assert np.array_equal(savgol_taps(win, polyorder, deriv, delta, use=use), want)
+
+
+def test_overwrite_removes_the_offsets_in_place_with_the_same_numbers():
+    """``analyze(..., overwrite=True)`` (what the command does with the recordings it
+    read) subtracts the offsets in the recording's own arrays: the same analysis, one
+    full-length copy per channel less, and the recording stays read-only."""
+    from vidiscover.corpus import realism_case
+
+    case = realism_case("dev", 3)                    # an accelerometer bias of 0.28 m/s^2
+    rec, copy = case.simulate(label=False).recording, case.simulate(label=False).recording
+    a0 = rec.a.copy()
+    kept = analyze(copy, n_boot=200, pulse=PulseModel())
+    moved = analyze(rec, n_boot=200, pulse=PulseModel(), overwrite=True)
+    assert moved.offsets.a_bias == kept.offsets.a_bias != 0.0
+    assert moved.impact_table.equals(kept.impact_table)
+    assert moved.restitution.right.ci_low == kept.restitution.right.ci_low
+    assert moved._recording.a is rec.a and not rec.a.flags.writeable
+    np.testing.assert_array_equal(rec.a, a0 - kept.offsets.a_bias)
+    np.testing.assert_array_equal(copy.a, a0)        # the default leaves it alone

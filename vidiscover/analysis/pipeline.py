@@ -172,7 +172,7 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None,
             detection: DetectionOptions | None = None,
             n_boot: int = 1000, seed: int = 0, flight_law=None,
             pulse: PulseModel | PulseResponse | None = None, offsets: bool = True,
-            features=None) -> AnalysisResult:
+            features=None, overwrite: bool = False) -> AnalysisResult:
     """Run stages 1-4 on a recording: impacts, reconstruction, restitution, return map.
 
     Parameters
@@ -210,6 +210,11 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None,
         default the analysis's own,
         :data:`~vidiscover.analysis.returnmap.ANALYSIS_FEATURES`; the regime
         classifier needs ``vidiscover.regimes.features.ALL_FEATURES``).
+    overwrite : bool
+        Subtract the offsets in the recording's own (writable) arrays ``x``, ``a``
+        and ``xe`` instead of in copies: the recording is changed, and a long one
+        needs three full-length arrays less (the ``analyze`` command does this with
+        the recordings it read itself; the numbers are the same).
 
     Returns
     -------
@@ -237,7 +242,7 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None,
     off = Offsets()
     if offsets:
         off = estimate_offsets(rec.t, rec.x, rec.a, rec.xe, forcing, det.t)
-        rec = _without_offsets(rec, off)
+        rec = _without_offsets(rec, off, overwrite)
     det = _smooth_part_corrected(det, off.a_bias)
     recon = reconstruct(det, rec, b=b, mu=mu)
     if theta_deg != 0.0:
@@ -276,14 +281,31 @@ def _pulse_summary(det: ImpactDetection) -> dict:
     return out
 
 
-def _without_offsets(rec, off: Offsets):
-    """``rec`` with the offsets subtracted (the same object when they are all 0)."""
+def _without_offsets(rec, off: Offsets, overwrite: bool = False):
+    """``rec`` with the offsets subtracted (the same object when they are all 0).
+
+    With ``overwrite``, in the recording's own arrays (a Recording keeps them
+    read-only; they are made writable for the subtraction where numpy allows it, i.e.
+    where their memory is writable) with the same arithmetic as the copies, so the
+    same numbers.
+    """
     if off.n_cycles == 0:
         return rec
     from dataclasses import replace
 
-    return replace(rec, x=rec.x - off.x_offset, a=rec.a - off.a_bias,
-                   xe=rec.xe - off.xe_offset)
+    def minus(v, c):
+        if overwrite and v.dtype == np.float64:
+            try:
+                v.flags.writeable = True
+            except ValueError:          # a view of read-only memory: a copy it is
+                return v - c
+            np.subtract(v, c, out=v)
+            v.flags.writeable = False
+            return v
+        return v - c
+
+    return replace(rec, x=minus(rec.x, off.x_offset), a=minus(rec.a, off.a_bias),
+                   xe=minus(rec.xe, off.xe_offset))
 
 
 def _smooth_part_corrected(det: ImpactDetection, a_bias: float) -> ImpactDetection:

@@ -261,7 +261,12 @@ def _wall_stats(name, r, n_total, rho, slow_ratio, n_boot, level, rng) -> WallSt
         # small index type: drawing and gathering cost most of the bootstrap
         idx = rng.integers(0, n, size=(int(n_boot), n),
                            dtype=np.int16 if n < 2 ** 15 else np.int64)
-        boot = np.sort(np.sqrt(r2[idx].mean(axis=1)))
+        # the resamples' means in blocks of rows: each row's mean is the same sum, and
+        # a long record's (n_boot, n) gather is not held at once (32 MB per wall of a
+        # 500 s record)
+        step = max(1, (1 << 20) // n)
+        boot = np.sort(np.sqrt(np.concatenate([r2[idx[k:k + step]].mean(axis=1)
+                                               for k in range(0, idx.shape[0], step)])))
         q = (1 - level) / 2
         lo, hi = (_quantile_sorted(boot, p) for p in (q, 1 - q))
     ratio = float(np.nanmedian(rho)) if np.isfinite(rho).any() else 0.0

@@ -168,9 +168,9 @@ def run_analyze(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
     from ..regimes.features import ALL_FEATURES
     from ..report import attach_regime, write_analysis, write_index
 
-    # the inputs are handed over one by one and not kept: the analysis holds its own
-    # offset-corrected copy of a recording, and a second full copy of a large file
-    # would stay alive for nothing (77 MB of a 200 MB CSV's peak)
+    # the inputs are handed over one by one and not kept, and their offsets are
+    # removed in place: a second full copy of a large file would stay alive for
+    # nothing (77 MB of a 200 MB CSV's peak)
     pending = [list(item) for item in loaded]
     loaded.clear()
 
@@ -178,7 +178,8 @@ def run_analyze(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
         truth = pending[k][1]
         result, regime = attach_regime(analyze_recording(pending[k].pop(0), mu=mu, seed=seed,
                                                          flight_law=law,
-                                                         features=ALL_FEATURES), model)
+                                                         features=ALL_FEATURES,
+                                                         overwrite=True), model)
         pending[k] = None
         written = write_analysis(result, target, figures=figures, truth=truth,
                                  regime=regime)
