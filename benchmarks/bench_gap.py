@@ -136,6 +136,15 @@ clearance + friction: asym 2634 when switched off, the equal walls land on an or
 impacts; a multi_ipc asym + tilt named asym, tilt 19.5), coverage 27/29; undetectable:
 one clearance at 11.7 mm (3.95), found anyway, so top-1 15/15 over the detectable ones.
 
+Fresh seeds 5077 and 9341 (``--drawn 24`` each, run once on this stop's code, 5077 at
+7b76424 and 9341 at 9e3546a, pooled): top-1 27/32 = 0.844 MISSED (5077: 12/16, 9341:
+15/16), none 8/8, shrink 0.996-0.997, pairs 7/8 = 0.875 MET, coverage 42/52 = 0.808 MET
+(5077: 22/25, 9341: 20/27). Misses: 3 of the 4 tilts (6.3-8.0 mm) called clearance
+(2) or unexplained (the recurring confusion: a tilt and a clearance error both shift
+the walls' impact positions), a speed law at 11.8 mm named asym (constants per wall
+leave 2 %), a clearance error at 10.7 mm (nominal 2.5) called none; pair: an
+asym + friction orbit without impacts named friction. Every case detectable.
+
 Usage::
 
     python benchmarks/bench_gap.py [--quick | --ci | --drawn N] [--n-jobs 2] [--seed 0]
