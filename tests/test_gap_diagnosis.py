@@ -519,12 +519,17 @@ def test_a_small_gap_is_significant_only_when_one_effect_removes_most_of_it():
 
 
 @pytest.mark.slow
-def test_a_long_contact_whose_impacts_the_nominal_recordings_lose_is_fitted():
+def test_a_long_contact_absorbed_by_the_learned_instrument_is_fitted():
     # drawn case 31415 #19: a 0.82 ms contact at 8.5 mm, 6400 Hz. The instrument
-    # learned from the recording absorbs part of the long pulse, the pulse width
-    # shows nothing, and the nominal model's recordings through it detect no impact:
-    # the whole nominal gap (2231) is in the two walls' rates. The contact is searched
-    # all the same and explains it (before: tau stayed at 2e-5, verdict unexplained).
+    # learned from the recording absorbs part of the long pulse. Until 9e3546a the
+    # nominal model's recordings through it detected no impact (their back-fit
+    # diverged): the whole nominal gap (2231) was in the two walls' rates, the pulse
+    # width showed nothing, and the contact was searched all the same (before that:
+    # tau stayed at 2e-5, verdict unexplained). Now their impacts are found, the
+    # pulse width shows the contact (37) and the nominal gap is 1715 with one BLAS
+    # thread (the test workers', diagnose's) and 1021 with two (a last-bit difference
+    # moves this long pulse's detection); the contact explains it either way (tau
+    # 0.79 / 0.65 ms, gap left 21 / 62; the verdict of diagnose is contact_duration).
     from vidiscover.effects import Effects
     from vidiscover.gap.battery import case_recording, drawn_cases
     from vidiscover.gap.diagnose import nominal_model
@@ -532,12 +537,12 @@ def test_a_long_contact_whose_impacts_the_nominal_recordings_lose_is_fitted():
 
     rec, _ = case_recording(drawn_cases(31415, 24)[19])
     model, nominal, _ = nominal_model(rec)
-    assert nominal.gap.total > 2000
+    assert nominal.gap.total > 500                  # 1715 / 1021
     so = _SensorObjective(model, Effects(), model.params.r)
-    assert so.own_gap("sensors.pulse_width") < 2.0 and so.impacts_lost()
+    assert so.own_gap("sensors.pulse_width") > 10.0 and not so.impacts_lost()   # 37
     fit = fit_candidate(model, "contact_duration")
-    assert 0.5e-3 < fit.params["tau"] < 1.0e-3      # 0.63 ms fitted for a true 0.82
-    assert fit.gap.total < 3.0                      # 1.6
+    assert 0.5e-3 < fit.params["tau"] < 1.0e-3      # 0.79 / 0.65 ms for a true 0.82
+    assert fit.gap.total < 0.1 * nominal.gap.total  # 21 of 1715 / 62 of 1021
 
 
 @pytest.mark.slow
