@@ -6,7 +6,7 @@ sampling rates, bias/offsets, ADC quantisation, mounted resonance, rigs beyond t
 paper's). Figures are quoted on the held-back ``holdout4`` split (never used for
 tuning; ``test`` and ``holdout`` to ``holdout3`` were read case by case in earlier
 stops). Measured (holdout4, 60 cases, run once, 2026-11-26, at 71e4ad4): count within
-3 % 0.922 of 51 periodic cases, precision / recall 0.980 / 0.981, median timing 18 us,
+3 % 0.922 of 51 periodic cases, precision / recall 0.9797 / 0.981, median timing 18 us,
 r per wall within 0.03 0.933 of 119 walls (0.983 against the true r of the impacts
 used); misses: holdout4-042 (a diverging back-fit behind a ringing instrument, fixed
 afterwards in 9e3546a: P/R 0.254/0.212 -> 0.975/0.988), -047 (accelerometer on its
