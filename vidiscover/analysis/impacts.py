@@ -1062,8 +1062,8 @@ class _Fitter:
         # zero in the ``pad`` samples of padding at both ends (no padded copies)
         self.data, self.bad = af, bad
         self.fs, self.L = fs, L
-        self.tpl = [_templates(m, fs, L) for m in self.models]
         self.vtpl = [[_templates(m, fs, L) for m in v] for v in self.variants]
+        self.tpl = [v[0] for v in self.vtpl]            # the models' own
         self.knorm = tuple(m.norm(fs) for m in self.models)
         self.peaks = tuple(m.peak(fs) for m in self.models)
         # per wall (row) and variant (column): norm, peak, contact duration, and the
@@ -1169,37 +1169,43 @@ class _Fitter:
 
     def windows(self, base: np.ndarray, rows: np.ndarray):
         """Fit windows (data minus smooth part minus the other pulses) and weights."""
-        p = self.pad
+        Y, W, _ = self._windows(base, rows)
+        return Y, W
+
+    def _windows(self, base: np.ndarray, rows: np.ndarray):
+        """:meth:`windows`, and the data minus the smooth part alone (``target``)."""
         model, pulses = self.render(padded=True, with_pulses=True)
         lo = self.rw - self.L
         c, _ = self._split()
-        idx = c[rows, None] + self.jl[None, :] + p
+        idx = c[rows, None] + self.jl[None, :] + self.pad
         target, W = self._at(idx, base)
         Y = target - model[idx] + pulses[rows, lo:lo + 2 * self.L + 1]
-        return Y, W
+        return Y, W, target
+
+    def _fit_rows(self, base: np.ndarray, rows: np.ndarray):
+        """The pulses ``rows`` fitted against the others' current fits.
+
+        Returns per row the sub-sample delay, the area, the width variant and whether
+        it diverged (:meth:`_wild`). Overlapping pulses fitted each against the
+        others' last amplitudes (a Jacobi sweep) diverge when their kernels correlate
+        strongly (a ringing response with candidates on its lobes, holdout4-042): a
+        pulse whose peak exceeds the data about it is fitted alone to the data.
+        """
+        Y, W, target = self._windows(base, rows)
+        lead = self._leading()[rows]
+        delta, amp, wid = self.fit_windows(Y, W, lead)
+        wild = self._wild(amp, wid, target, W)
+        if wild.any():
+            dw, aw, ww = self.fit_windows(target[wild], W[wild], lead[wild])
+            delta[wild], amp[wild], wid[wild] = dw, aw, ww
+        return delta, amp, wid, wild
 
     def backfit(self, base: np.ndarray, iterations: int = 2) -> None:
         if self.n == 0:
             return
-        p = self.pad
-        lo = self.rw - self.L
         for _ in range(iterations):
-            model, pulses = self.render(padded=True, with_pulses=True)
             c, _ = self._split()
-            own = pulses[:, lo:lo + 2 * self.L + 1]
-            idx = c[:, None] + self.jl[None, :] + p
-            target, W = self._at(idx, base)
-            Y = target - model[idx] + own
-            lead = self._leading()
-            delta, amp, wid = self.fit_windows(Y, W, lead)
-            wild = self._wild(amp, wid, target, W)
-            if wild.any():
-                # overlapping pulses fitted each against the others' last amplitudes
-                # (a Jacobi sweep) diverge when their kernels correlate strongly (a
-                # ringing response with candidates on its lobes, holdout4-042): a pulse
-                # whose peak exceeds the data about it is fitted alone to the data
-                dw, aw, ww = self.fit_windows(target[wild], W[wild], lead[wild])
-                delta[wild], amp[wild], wid[wild] = dw, aw, ww
+            delta, amp, wid, wild = self._fit_rows(base, np.arange(self.n))
             pos = c + delta
             ok = np.isfinite(pos) & np.isfinite(amp)
             near = self._near(wild)
@@ -1208,8 +1214,9 @@ class _Fitter:
             self.amp = np.where(take, np.where(ok, amp, 0.0), self.amp)
             self.wid = np.where(take, np.where(ok, wid, 0), self.wid)
             if near.any():
-                # ... and its neighbours are refitted in two half-sweeps (every other
-                # one in time order against the others' new fits), which converge
+                # the neighbours of a diverged pulse (:meth:`_fit_rows`) are refitted in
+                # two half-sweeps (every other one in time order against the others'
+                # new fits), which converge
                 rows = np.flatnonzero(near)
                 self._refit(rows[0::2], base)
                 self._refit(rows[1::2], base)
@@ -1230,18 +1237,8 @@ class _Fitter:
         """Refit the pulses ``rows`` against the current fits of all the others."""
         if rows.size == 0:
             return
-        lo = self.rw - self.L
-        model, pulses = self.render(padded=True, with_pulses=True)
         c, _ = self._split()
-        idx = c[rows, None] + self.jl[None, :] + self.pad
-        target, W = self._at(idx, base)
-        Y = target - model[idx] + pulses[rows, lo:lo + 2 * self.L + 1]
-        lead = self._leading()[rows]
-        delta, amp, wid = self.fit_windows(Y, W, lead)
-        wild = self._wild(amp, wid, target, W)
-        if wild.any():
-            dw, aw, ww = self.fit_windows(target[wild], W[wild], lead[wild])
-            delta[wild], amp[wild], wid[wild] = dw, aw, ww
+        delta, amp, wid, _ = self._fit_rows(base, rows)
         pos = c[rows] + delta
         ok = np.isfinite(pos) & np.isfinite(amp)
         P, A, K = self.pos.copy(), self.amp.copy(), self.wid.copy()
