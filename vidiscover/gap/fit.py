@@ -562,20 +562,17 @@ def _slope_search(model: Model, base: Effects, laws: dict) -> tuple[dict, int]:
     """
     imp = model.real.impacts
     speed = {"right": _one_speed(imp, 1), "left": _one_speed(imp, -1)}
-    grids = {}
-    for side, (level, a) in laws.items():
-        v = speed[side]
-        if v is None:
-            grids[side] = [(level, a)]
-        else:
-            a_max = max((1.0 - level) / v, 0.0)
-            grids[side] = [(level + f * a_max * v, f * a_max) for f in SLOPE_FRACTIONS]
-    if any(len(g) == 1 for g in grids.values()):
+    if None in speed.values():
         # only where every wall is hit at one speed: beside a wall whose regression
         # sees the slope the search chose on the fit draw what the validation draw
         # refused (seed-0 reduced battery, law at 15 mm: 24 with the regression's
         # slope and a zero one, 59 with the searched one)
         return laws, 0
+    grids = {}
+    for side, (level, _) in laws.items():
+        v = speed[side]
+        a_max = max((1.0 - level) / v, 0.0)
+        grids[side] = [(level + f * a_max * v, f * a_max) for f in SLOPE_FRACTIONS]
     best, n = (math.inf, laws), 0
     for right in grids["right"]:
         for left in grids["left"]:
