@@ -508,7 +508,10 @@ def summarise(rows: list[dict]) -> dict:
     shrink = [r["shrink"] for r in cat]
     shrink_right = [r["shrink"] for r in cat if r["correct"]]
     # two effects: both named (the selection holds both names, in any order)
-    both = [set(r["effect"].split("+")) <= set(r.get("named", [])) for r in pairs]
+    def both_named(r):
+        return set(r["effect"].split("+")) <= set(r.get("named", []))
+
+    both = [both_named(r) for r in pairs]
     # interval coverage: every true numeric parameter of a named effect (an interval
     # that could not be determined counts as not covering)
     cov = [c["covered"] for r in rows for c in r.get("coverage", [])]
@@ -525,7 +528,7 @@ def summarise(rows: list[dict]) -> dict:
     measured = [r for r in cat + pairs if r.get("detectable") is not None]
     cat_seen = [r for r in cat if seen(r)]
     pairs_seen = [r for r in pairs if seen(r)]
-    both_seen = [set(r["effect"].split("+")) <= set(r.get("named", [])) for r in pairs_seen]
+    both_seen = [both_named(r) for r in pairs_seen]
 
     return {
         "accuracy": share(cat),
