@@ -29,6 +29,9 @@ same on every machine and in every process. The split is fixed and documented:
   come from here, run once per stop, after the stop's changes have landed;
 * ``"holdout4"`` (96 cases, a sixth stream): opened when ``holdout3`` had been run for
   one stop's quotes and its misses read (2026-11-26, third stop); later quotes come
+  from here, under the same rule;
+* ``"holdout5"`` (96 cases, a seventh stream): opened when ``holdout4`` had been run for
+  one stop's quotes and its misses read (2026-11-26, fourth stop); later quotes come
   from here, under the same rule.
 
 The base amplitude is chosen so that the ball impacts: the linear LO response is
@@ -63,10 +66,10 @@ __all__ = ["ENTROPY", "SPLITS", "N_CASES", "N_SUITE", "RANGES", "RealismCase", "
 ENTROPY = 20261123
 #: Split name -> stream id of its seeds.
 SPLITS: Mapping[str, int] = {"dev": 1, "test": 2, "holdout": 3, "holdout2": 4,
-                             "holdout3": 5, "holdout4": 6}
+                             "holdout3": 5, "holdout4": 6, "holdout5": 7}
 #: Number of cases of each split.
 N_CASES: Mapping[str, int] = {"dev": 96, "test": 96, "holdout": 96, "holdout2": 96,
-                              "holdout3": 96, "holdout4": 96}
+                              "holdout3": 96, "holdout4": 96, "holdout5": 96}
 #: Number of dev cases the test suite runs (the first ones of the split).
 N_SUITE = 24
 
