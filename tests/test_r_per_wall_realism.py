@@ -149,3 +149,31 @@ def test_an_analysis_in_the_filter_delay_frame_pickles_and_reads_the_same():
     for a, b in zip(out.reconstruction._shift(t), back.reconstruction._shift(t)):
         np.testing.assert_array_equal(a, b)
     np.testing.assert_array_equal(out.restitution.table["r"], back.restitution.table["r"])
+
+
+def test_the_lo_between_impacts_is_not_pinned_to_a_saturated_laser():
+    """holdout4-011 (Kelvin-Voigt walls, r 0.38, mu 0.28, tilt -2.3 deg, linear-phase
+    chain): a 10 mm laser on an LO of 16 mm amplitude, 58 % of its samples on a rail.
+    The impact states were pinned off the rails, but the LO's own x and v (the regime
+    features and the flights solved under a flight law read them) were still pinned to
+    the rails: 3.2 mm and 69 mm/s RMS off the truth, and under the case's friction and
+    tilt the left wall's r read 0.62 for 0.38 (error 0.233). Pinned off the rails: 0.08
+    mm and 1.9 mm/s, r errors -0.009 / +0.012."""
+    from vidiscover.analysis import analyze
+    from vidiscover.corpus import realism_case
+
+    case = realism_case("holdout4", 11)
+    sim = case.simulate()
+    rec, res, imp = sim.recording, sim.result, sim.truth.impacts
+    out = analyze(rec, flight_law=(case.mu, case.theta), n_boot=0)
+    rc = out.reconstruction
+    assert 0.5 < rc.laser_rail_share < 0.65                        # 0.58
+    true = res.evaluate(rc.t + res.settle)
+    m = slice(rc.t.size // 20, -(rc.t.size // 20))
+    assert np.sqrt(np.mean((rc.x - true["x"])[m] ** 2)) < 0.2e-3   # 0.08 mm, was 3.2
+    assert np.sqrt(np.mean((rc.v - true["xd"])[m] ** 2)) < 4e-3    # 1.9 mm/s, was 69
+    side = np.asarray(imp.side)
+    for s, bound in (("right", 0.015), ("left", 0.02)):           # 0.009 / 0.012
+        r_true = float(np.sqrt(np.mean(np.asarray(imp.r)[side == s] ** 2)))
+        w = out.restitution.wall(s)
+        assert w.n >= 20 and abs(w.rms - r_true) < bound, (s, w.rms, r_true)   # left 0.233

@@ -90,6 +90,9 @@ class FlightData:
         self._t = t
         self._cdv = cdv
         self._vc = np.asarray(recon.v, float) - cdv[np.searchsorted(self.t_imp, t, side="left")]
+        # recon.v is the LO as recorded; the impacts, the exits and the baseline are in
+        # the impacts' time frame (a causal instrument's lag apart): its velocity there
+        self._shift = recon._shift
         self._acc = np.asarray(det.baseline, float)
 
     @classmethod
@@ -166,7 +169,10 @@ class FlightData:
     def lo_velocity(self, tq):
         """LO velocity (m/s) at times ``tq``, its jumps at the impacts included."""
         tq = np.asarray(tq, float)
-        return np.interp(tq, self._t, self._vc) + self._cdv[np.searchsorted(self.t_imp, tq)]
+        out = np.interp(tq, self._t, self._vc) + self._cdv[np.searchsorted(self.t_imp, tq)]
+        if self._shift is not None:
+            out = out + self._shift(tq - self._t[0])[1]
+        return out
 
     def lo_acceleration(self, tq):
         """Smooth LO acceleration (m/s^2) at times ``tq`` (the detection's baseline)."""
