@@ -28,7 +28,11 @@ flight law so that detection and restitution are scored on their own):
 * *precision / recall*: same wall, within 0.5 ms of the true contact entry;
 * *timing*: median |t_est - t_in| of matched impacts (target <= 50 us);
 * *r*: per wall with >= 10 clean impacts, |RMS(r_est) - RMS(r_true)| (target 0.03),
-  RMS(r_true) over every true impact of the wall; beside it (no target) the same
+  RMS(r_true) over every true impact of the wall; then with RMS(r_true) over the
+  wall's clean impacts, told from the truth alone (detectable by the count's
+  criterion, and not a contact in which the ball comes to rest: a sticking episode's
+  last re-impacts at mm/s, r ~ 0 on a Kelvin-Voigt wall, are no restitution
+  measurement), the must-show's reading; beside them (no target) the same
   error against the true r of the impacts the estimate used, which separates the
   estimator's error from which impacts are observable (a chattering wall's last
   re-impacts, a stick, a clipped pulse).
@@ -107,7 +111,12 @@ def score_case(case) -> dict:
     precision = len(ie) / det.n if det.n else float("nan")
     recall = tp / n_ok if n_ok else float("nan")
     timing = float(np.median(np.abs(det.t[ie] - imp.t_in[it]))) if len(ie) else float("nan")
-    walls, same = {}, {}
+    walls, same, clean = {}, {}, {}
+    # the wall's clean impacts, from the truth alone: detectable (the count's criterion)
+    # and not a contact in which the ball comes to rest (a sticking episode's last
+    # re-impacts at mm/s read r ~ 0 on a Kelvin-Voigt wall: holdout4-002's right wall,
+    # 40 of 200 at 4 mm/s)
+    stuck = np.asarray(imp.stuck, dtype=bool)
     table = out.impact_table
     used = table["r_used"].to_numpy(dtype=bool)
     r_est = table["r"].to_numpy(dtype=float)
@@ -117,6 +126,10 @@ def score_case(case) -> dict:
         r_true = np.asarray(imp.r)[side_true == (1 if side == "right" else -1)]
         if est.n >= 10 and r_true.size:
             walls[side] = abs(est.rms - float(np.sqrt(np.mean(r_true ** 2))))
+            keep = ok & ~stuck & (side_true == (1 if side == "right" else -1))
+            if keep.sum() >= 10:
+                r_clean = np.asarray(imp.r, dtype=float)[keep]
+                clean[side] = abs(est.rms - float(np.sqrt(np.mean(r_clean ** 2))))
             # the same error on the impacts the estimate used (matched to true ones):
             # what the estimator gets wrong, without which impacts it could observe
             k = [i for i in np.flatnonzero(used & (table["side"].to_numpy() == side))
@@ -136,7 +149,7 @@ def score_case(case) -> dict:
                                  and abs(det.n - n_extra_old - n_ok_old) <= 0.03 * n_ok_old),
             "recall_old": recall_old,
             "precision": precision, "recall": recall, "timing_us": timing * 1e6,
-            "r_err": walls, "r_err_same": same,
+            "r_err": walls, "r_err_same": same, "r_err_clean": clean,
             "periodic": bool((truth.regime or {}).get("periodic")),
             "seconds_sim": t_sim, "seconds_analyze": t_an,
             "pulse": out.detection.response.to_dict() if out.detection.response else None}
@@ -163,6 +176,10 @@ def _summary(rows: list[dict]) -> dict:
         "r_same_share": float(np.mean([e <= TARGETS["r_tol"] for e in same])) if (
             same := [e for r in rows for e in r.get("r_err_same", {}).values()])
         else float("nan"),
+        "r_clean_share": float(np.mean([e <= TARGETS["r_tol"] for e in cl])) if (
+            cl := [e for r in rows for e in r.get("r_err_clean", {}).values()])
+        else float("nan"),
+        "n_walls_clean": len(cl),
         "count_share_old": float(np.mean([r["count_ok_old"] for r in periodic])) if periodic
         else float("nan"),
         "recall_old": float(np.mean(old)) if (old := [r["recall_old"] for r in rows
@@ -218,6 +235,8 @@ def main() -> None:
               ("recall (mean over cases)", total["recall"], ">=", TARGETS["recall"]),
               ("median timing error (us)", total["timing_us"], "<=", TARGETS["timing_us"]),
               ("walls with r within 0.03", total["r_wall_share"], ">=",
+               TARGETS["r_wall_share"]),
+              ("same, truth over clean impacts", total["r_clean_share"], ">=",
                TARGETS["r_wall_share"])]
     for what, val, op, tgt in checks:
         met = val >= tgt if op == ">=" else val <= tgt
@@ -225,6 +244,8 @@ def main() -> None:
     print(f"  (r against the true r of the same impacts the estimate used, not every "
           f"impact of the wall: {total['r_same_share']:.3f} of the walls within "
           f"{TARGETS['r_tol']}; the rest of the misses above is which impacts are observable)")
+    print(f"  (clean impacts: the truth's detectable ones without a resting contact; "
+          f"{total['n_walls_clean']} walls with >= 10 of them)")
     print(f"  failed cases: {len(rows) - len(good)}")
     print(f"  (criterion before resting contacts were told apart: count "
           f"{total['count_share_old']:.3f}, recall {total['recall_old']:.3f})")
