@@ -290,6 +290,38 @@ def _layout(model: PulseModel, fs: float) -> tuple[float, int]:
     return float(ref), int(np.clip(span, _MIN_SPAN, _MAX_SPAN))
 
 
+_TAIL_END = 1e-4           # the truncated tail is followed down to this share of the peak
+
+
+@functools.lru_cache(maxsize=64)
+def _tail_envelope(model: PulseModel, fs: float) -> tuple[np.ndarray, np.ndarray]:
+    """The response's ringing beyond the kernel's support, relative to its peak.
+
+    Returns ``(lags, env)``: integer lags (samples from the reference) past the
+    support, where the response still exceeds :data:`_TAIL_END` of its peak, and the
+    running maximum (+/- 2 samples) of ``|response| / peak`` there. Empty for a
+    response that ends within the support (the linear-phase kernel).
+    """
+    empty = np.zeros(0), np.zeros(0)
+    if not model.causal:
+        return empty
+    ref, span = _layout(model, float(fs))
+    lags = np.arange(span - 2, 4 * _MAX_SPAN + 1, dtype=float)
+    g = np.abs(_response(model, lags + ref, float(fs)))
+    top = abs(float(_response(model, np.array([ref]), float(fs))[0]))
+    if not top > 0:
+        return empty
+    rel = g / top
+    above = np.flatnonzero(rel > _TAIL_END)
+    if above.size == 0:
+        return empty
+    stop = above[-1] + 3
+    pad = np.pad(rel[:stop], 2)
+    env = np.max(np.stack([pad[i:i + stop] for i in range(5)]), axis=0)
+    keep = lags[:stop] > span
+    return lags[:stop][keep], env[keep]
+
+
 @functools.lru_cache(maxsize=64)
 def _kernel_flat(model: PulseModel, fs: float) -> np.ndarray:
     """Kernel on a grid of 1/_OVERSAMPLE samples over +/- (span + 1) samples."""
