@@ -26,7 +26,12 @@ from vidiscover.regimes.classifier import (
     save_model,
 )
 from vidiscover.regimes.dataset import PARAM_RANGES, draw_cases, draw_realism_cases, generate
-from vidiscover.regimes.features import ALL_FEATURES, REGIME_FEATURES, STATE_FEATURES
+from vidiscover.regimes.features import (
+    ALL_FEATURES,
+    IMPACT_FEATURES,
+    REGIME_FEATURES,
+    STATE_FEATURES,
+)
 from vidiscover.workflows import simulate_to_memory
 
 T = 0.125
@@ -57,7 +62,8 @@ def _locked(n_cycles=40, lag=0.03):
 
 
 def test_regime_features_are_an_explicit_set_importing_registers_nothing():
-    assert list(ALL_FEATURES) == [*ANALYSIS_FEATURES, *REGIME_FEATURES, *STATE_FEATURES]
+    assert list(ALL_FEATURES) == [*ANALYSIS_FEATURES, *REGIME_FEATURES, *STATE_FEATURES,
+                                  *IMPACT_FEATURES]
     assert not set(REGIME_FEATURES) & set(ANALYSIS_FEATURES)
     assert list(compute_features(_ctx(*_locked()))) == list(ANALYSIS_FEATURES)
 
@@ -94,6 +100,30 @@ def test_locked_two_impacts_per_cycle():
     # a pure sine LO response: periodic with period 1, no stroboscopic spread
     assert f["waveform_period"] == 1.0 and f["waveform_period_error"] < 1e-9
     assert f["strobe_dispersion"] < 1e-9 and f["envelope_cv"] < 1e-9
+
+
+def test_weak_detections_leave_the_strong_impacts_and_their_repetition():
+    """A locked two-impact motion with a weak spurious detection after every left impact
+    (a long contact split, other rigs' seed 12001 #173: 0.3 % of the impact) is two
+    strong alternating impacts per cycle, repeating to the microsecond; a drift of the
+    impact phase by 0.001 T per cycle (a weakly chaotic motion read as periodic by the
+    stroboscopic state, seed 12001 #95) is not."""
+    t, side = _locked()
+    dv = np.where(side == "right", 0.05, -0.05)
+    extra = t[side == "left"] + 0.006
+    tt = np.r_[t, extra]
+    order = np.argsort(tt)
+    sides = np.r_[side, ["left"] * extra.size][order]
+    dvs = np.r_[dv, np.full(extra.size, -2e-4)][order]
+    f = _all(_ctx(tt[order], sides, dv=dvs))
+    assert f["two_per_cycle_share"] == 0.0 and f["impacts_per_cycle"] == pytest.approx(3.0)
+    assert f["strong_per_cycle"] == pytest.approx(2.0) and f["strong_two_share"] == 1.0
+    assert f["strong_alternation"] == 1.0 and f["weak_share"] == pytest.approx(1 / 3)
+    assert f["impact_period_error"] < 1e-9 and f["impact_dv_error"] < 1e-9
+    k = np.floor(t / T)
+    drift = _all(_ctx(t + 0.001 * T * k, side, dv=dv))
+    assert drift["impact_period_error"] == pytest.approx(0.001, rel=1e-6)
+    assert drift["strobe_period_error"] < 1e-9                 # the LO sine repeats
 
 
 def test_random_impacts_are_not_locked():

@@ -93,3 +93,32 @@ def test_simulated_low_left_restitution_chatters_into_multi_ipc():
                    settle=10.0)
     lab = label_simulation(res)
     assert lab.label == "multi_ipc" and lab.ipc > 3
+
+
+def test_a_bounce_that_barely_leaves_the_wall_is_chatter_of_the_impact():
+    """A tilted rig with friction (held-out paper-rig draw, seed 12005 #215): each
+    cycle one right impact at 0.0155 m/s, then a bounce at <= 0.0006 m/s that takes
+    the ball 1-3 um (3e-5 - 1e-4 of the clearance) off the wall before it sticks. The bounce
+    is chatter of the impact (CHATTER_SHARE), the motion one impact per cycle; counted
+    on its own it would be multi_ipc (as before the rule)."""
+    from vidiscover.regimes import labels
+    from vidiscover.regimes.dataset import Case
+
+    case = Case(seed=0, b=0.014997349592093647, amplitude=0.0009824241108501006,
+                frequency=6.135664742884767, mass_ratio=0.01116140731121722,
+                r_right=0.25422143974641404, r_left=0.3243784491585119,
+                mu=0.268683009698684, theta=0.6552158686986759)
+    res = simulate(case.params(), case.effects(), settle=12.0, duration=5.12)
+    imp = res.record_impacts()
+    chatter = labels.chatter_mask(res, imp)
+    assert 0.4 < chatter.mean() < 0.5                     # 25 of 56 impacts
+    assert np.abs(imp.u_minus[chatter]).max() < 0.05 * np.abs(imp.u_minus[~chatter]).min()
+    lab = label_simulation(res)
+    assert lab.label == "1ipc" and lab.ipc == pytest.approx(1.0, abs=0.05)
+    assert (labels.chatter_mask(res, imp, share=1e-4) == chatter).all()
+    assert labels.chatter_mask(res, imp, share=1e-5).sum() <= 2
+    try:
+        labels.CHATTER_SHARE, kept = 0.0, labels.CHATTER_SHARE
+        assert label_simulation(res).label == "multi_ipc"
+    finally:
+        labels.CHATTER_SHARE = kept

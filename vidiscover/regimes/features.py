@@ -20,7 +20,12 @@ float, NaN when undefined for the record.
   (spread of the stroboscopic section), ``envelope_cv``; in :data:`STATE_FEATURES`
   (part of :data:`ALL_FEATURES`), ``strobe_state_error`` (the labels' periodicity
   test on the stroboscopic LO state, x and x');
-* strengths: ``dv_side_ratio`` (|log| of the mean pulse ratio right/left).
+* strengths: ``dv_side_ratio`` (|log| of the mean pulse ratio right/left);
+* in :data:`IMPACT_FEATURES` (part of :data:`ALL_FEATURES`), the strong impacts
+  (|dv| >= :data:`STRONG_SHARE` of their wall's 90th percentile): ``strong_per_cycle``,
+  ``strong_one_share``, ``strong_two_share``, ``strong_alternation``, ``weak_share``,
+  and the repetition of their sequence after p <= 4 cycles, ``impact_period_error``
+  (timing, in periods) and ``impact_dv_error`` (relative |dv|).
 
 Examples
 --------
@@ -37,7 +42,8 @@ import numpy as np
 
 from ..analysis.returnmap import ANALYSIS_FEATURES, FeatureContext, FeatureSet
 
-__all__ = ["REGIME_FEATURES", "ALL_FEATURES", "STATE_FEATURES", "cycle_waveforms"]
+__all__ = ["REGIME_FEATURES", "ALL_FEATURES", "STATE_FEATURES", "IMPACT_FEATURES",
+           "cycle_waveforms"]
 
 _NAN = float("nan")
 #: Samples per cycle of the resampled LO waveform.
@@ -326,6 +332,151 @@ def _env_cv(ctx: FeatureContext) -> float:
     return float(a.std() / a.mean()) if a.mean() > 0 else _NAN
 
 
+#: An impact is "strong" when its |dv| is at least this share of the 90th percentile
+#: of |dv| on its wall: weaker detections are a contact split in two, a ringing
+#: instrument's lobe or the tail of a chatter sequence, which the detection finds
+#: in some recordings and not in others.
+STRONG_SHARE = 0.1
+
+
+def _strong(ctx: FeatureContext) -> np.ndarray:
+    """Mask of the strong impacts (:data:`STRONG_SHARE`; once per context)."""
+    return ctx.memo("strong", _strong_of)
+
+
+def _strong_of(ctx: FeatureContext) -> np.ndarray:
+    a = np.abs(np.asarray(ctx.dv, float))
+    keep = np.zeros(a.size, dtype=bool)
+    for s in ("right", "left"):
+        m = ctx.side == s
+        if m.any():
+            keep[m] = a[m] >= STRONG_SHARE * np.percentile(a[m], 90)
+    keep.flags.writeable = False
+    return keep
+
+
+def _strong_counts(ctx: FeatureContext) -> np.ndarray:
+    c = ctx.cycles()
+    if c.size < 2:
+        return np.zeros(0, dtype=np.int64)
+    t = np.sort(np.asarray(ctx.t, float)[_strong(ctx)])
+    k = np.searchsorted(t, c, side="left")
+    k[-1] = np.searchsorted(t, c[-1], side="right")
+    return np.diff(k)
+
+
+def _strong_ipc(ctx: FeatureContext) -> float:
+    """Mean strong impacts (:data:`STRONG_SHARE`) per complete cycle."""
+    c = _strong_counts(ctx)
+    return float(c.mean()) if c.size else _NAN
+
+
+def _strong_share1(ctx: FeatureContext) -> float:
+    """Share of complete cycles with exactly one strong impact."""
+    c = _strong_counts(ctx)
+    return float((c == 1).mean()) if c.size else _NAN
+
+
+def _strong_share2(ctx: FeatureContext) -> float:
+    """Share of complete cycles with exactly two strong impacts."""
+    c = _strong_counts(ctx)
+    return float((c == 2).mean()) if c.size else _NAN
+
+
+def _strong_alternation(ctx: FeatureContext) -> float:
+    """Share of consecutive strong impacts on opposite walls."""
+    s = ctx.side[_strong(ctx)]
+    return float((s[1:] != s[:-1]).mean()) if s.size >= 2 else _NAN
+
+
+def _weak_share(ctx: FeatureContext) -> float:
+    """Share of the detected impacts that are not strong."""
+    return float(1.0 - _strong(ctx).mean()) if ctx.t.size else _NAN
+
+
+def _impact_period_error(ctx: FeatureContext) -> float:
+    """How far the strong impacts are from repeating after p <= 4 cycles, in periods.
+
+    Over the last half of the record: for each strong impact, the time from p periods
+    after it to the nearest strong impact on the same wall (half a period when there
+    is none); the 90th percentile of those, the smallest over p. Impact times are
+    measured to tens of microseconds, so a slowly drifting (quasi-periodic or weakly
+    chaotic) motion whose stroboscopic LO state repeats to within the reconstruction's
+    error still shows here.
+    """
+    m = _strong(ctx)
+    t, side = np.asarray(ctx.t, float)[m], ctx.side[m]
+    T = ctx.period
+    if t.size < 8 or not T > 0:
+        return _NAN
+    half = 0.5 * (ctx.t_start + ctx.t_end)
+    best = _NAN
+    for p in range(1, 5):
+        errs = []
+        for s in ("right", "left"):
+            ts = t[side == s]
+            src = ts[(ts >= half) & (ts + p * T <= ctx.t_end - 0.5 * T)]
+            if not src.size:
+                continue
+            want = src + p * T
+            j = np.clip(np.searchsorted(ts, want), 1, ts.size - 1)
+            d = np.minimum(np.abs(ts[j] - want), np.abs(ts[j - 1] - want))
+            errs.append(np.minimum(d / T, 0.5))
+        if not errs:
+            continue
+        e = float(np.percentile(np.concatenate(errs), 90))
+        best = e if not (best <= e) else best
+    return best
+
+
+def _impact_dv_error(ctx: FeatureContext) -> float:
+    """How far the strong impacts' |dv| are from repeating after p <= 4 cycles.
+
+    As ``impact_period_error``, the relative change of |dv| to the impact nearest
+    p periods later on the same wall (1 when none is within a tenth of a period),
+    90th percentile, smallest over p.
+    """
+    m = _strong(ctx)
+    t, side, a = np.asarray(ctx.t, float)[m], ctx.side[m], np.abs(np.asarray(ctx.dv, float))[m]
+    T = ctx.period
+    if t.size < 8 or not T > 0:
+        return _NAN
+    half = 0.5 * (ctx.t_start + ctx.t_end)
+    best = _NAN
+    for p in range(1, 5):
+        errs = []
+        for s in ("right", "left"):
+            w = side == s
+            ts, av = t[w], a[w]
+            src = (ts >= half) & (ts + p * T <= ctx.t_end - 0.5 * T)
+            if not src.any() or ts.size < 2:
+                continue
+            want = ts[src] + p * T
+            j = np.clip(np.searchsorted(ts, want), 1, ts.size - 1)
+            j = np.where(np.abs(ts[j - 1] - want) < np.abs(ts[j] - want), j - 1, j)
+            near = np.abs(ts[j] - want) <= 0.1 * T
+            rel = np.abs(av[j] - av[src]) / np.maximum(av[src], 1e-300)
+            errs.append(np.where(near, np.minimum(rel, 1.0), 1.0))
+        if not errs:
+            continue
+        e = float(np.percentile(np.concatenate(errs), 90))
+        best = e if not (best <= e) else best
+    return best
+
+
+#: Features of the strong impacts (:data:`STRONG_SHARE`) and of the repetition of the
+#: impact sequence, part of :data:`ALL_FEATURES`.
+IMPACT_FEATURES = FeatureSet({
+    "strong_per_cycle": _strong_ipc,
+    "strong_one_share": _strong_share1,
+    "strong_two_share": _strong_share2,
+    "strong_alternation": _strong_alternation,
+    "weak_share": _weak_share,
+    "impact_period_error": _impact_period_error,
+    "impact_dv_error": _impact_dv_error,
+})
+
+
 #: The features this module defines.
 REGIME_FEATURES = FeatureSet({
     "one_per_cycle_share": _share1,
@@ -357,4 +508,4 @@ STATE_FEATURES = FeatureSet({"strobe_state_error": _strobe_state})
 #: The analysis's own features, the regime features and the state's periodicity: the
 #: set the classifier, sweeps and the ``analyze`` command compute
 #: (``analyze(rec, features=ALL_FEATURES)``).
-ALL_FEATURES = ANALYSIS_FEATURES | REGIME_FEATURES | STATE_FEATURES
+ALL_FEATURES = ANALYSIS_FEATURES | REGIME_FEATURES | STATE_FEATURES | IMPACT_FEATURES

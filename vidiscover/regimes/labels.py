@@ -1,8 +1,12 @@
 """Ground-truth regime labels from a simulated state (the README's 'Regime labels', a contract).
 
-With T = 1/f and cycles cut at base phase 0 (simulation times k T), n_k impacts in
-cycle k, ipc = mean n_k, phi = share of cycles with n_k >= 1, A_k = half the
-peak-to-peak LO displacement in cycle k, M = (P95(A) - P5(A)) / (P95(A) + P5(A)) and
+An impact counts when the ball got at least :data:`CHATTER_SHARE` (0.1 %) of the
+clearance 2b away from the wall since the previous impact on that wall; a smaller
+bounce is chatter of that impact (a ball resting against the wall, bouncing microns
+before it sticks; :func:`chatter_mask`). With T = 1/f and cycles cut at base phase 0
+(simulation times k T), n_k (counted) impacts in cycle k, ipc = mean n_k, phi =
+share of cycles with n_k >= 1, A_k = half the peak-to-peak LO displacement in cycle k,
+M = (P95(A) - P5(A)) / (P95(A) + P5(A)) and
 asym = |mean(dt after a right impact) - mean(dt after a left impact)| / T over
 alternating pairs:
 
@@ -26,11 +30,17 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-__all__ = ["LABELS", "RegimeTruth", "label_simulation", "label_from_events"]
+__all__ = ["LABELS", "RegimeTruth", "label_simulation", "label_from_events", "chatter_mask",
+           "CHATTER_SHARE"]
 
 #: Regime labels, a contract (the README's 'Regime labels'), from simple to complex.
 LABELS: tuple[str, ...] = ("no_impact", "1ipc", "2ipc_sym", "2ipc_asym", "multi_ipc",
                            "smr", "chaotic")
+
+
+#: A bounce that takes the ball less than this share of the clearance 2b off the wall
+#: it hit is chatter of that impact, not an impact of its own (:func:`chatter_mask`).
+CHATTER_SHARE = 1e-3
 
 
 @dataclass(frozen=True)
@@ -84,6 +94,48 @@ def _is_periodic(strobe_x: np.ndarray, strobe_v: np.ndarray, amp_x: float, amp_v
         if dx <= tol * amp_x and dv <= tol * amp_v:
             return p
     return None
+
+
+def chatter_mask(result, imp, share: float | None = None, points: int = 32) -> np.ndarray:
+    """Impacts that are part of the previous impact's chatter on the same wall.
+
+    Between two consecutive impacts on the same wall the ball's largest distance from
+    that wall (its relative position z = y - x against the wall at +-b, evaluated at
+    ``points`` instants of the flight) below ``share`` of the clearance 2b
+    (:data:`CHATTER_SHARE`) makes the second a bounce of a ball resting against the
+    wall (a chatter sequence towards sticking), not an impact of its own.
+
+    Parameters
+    ----------
+    result : SimulationResult
+        The simulation.
+    imp : ImpactTable
+        Its impacts (those of the record), sorted by time.
+
+    Returns
+    -------
+    ndarray of bool
+        True where an impact continues the previous one.
+    """
+    share = CHATTER_SHARE if share is None else share
+    out = np.zeros(imp.n, dtype=bool)
+    b = float(result.params.b)
+    if imp.n < 2 or not share > 0:
+        return out
+    side = np.asarray(imp.side)
+    pairs = np.flatnonzero(side[1:] == side[:-1])
+    if not pairs.size:
+        return out
+    a = np.asarray(imp.t_out, float)[pairs]
+    e = np.asarray(imp.t, float)[pairs + 1]
+    frac = (np.arange(1, points + 1) / (points + 1))[None, :]
+    grid = (a[:, None] + (e - a)[:, None] * frac).ravel()
+    order = np.argsort(grid, kind="stable")
+    z = np.empty(grid.size)
+    z[order] = np.asarray(result.evaluate(grid[order])["z"], float)
+    gap = b - side[pairs][:, None] * z.reshape(a.size, points)   # distance from the wall
+    out[pairs + 1] = gap.max(axis=1) < share * 2 * b
+    return out
 
 
 def label_from_events(t_imp: np.ndarray, side_imp: np.ndarray, cycle_starts: np.ndarray,
@@ -175,5 +227,6 @@ def label_simulation(result, sample_rate: float = 6400.0) -> RegimeTruth:
            else np.zeros(0))
     strobe = result.evaluate(starts[:-1]) if starts.size > 1 else {"x": np.zeros(0),
                                                                    "xd": np.zeros(0)}
-    return label_from_events(imp.t, imp.side, starts, np.asarray(amp), strobe["x"],
+    keep = ~chatter_mask(result, imp)
+    return label_from_events(imp.t[keep], imp.side[keep], starts, np.asarray(amp), strobe["x"],
                              strobe["xd"], float(np.abs(x).max()), float(np.abs(v).max()), T)
