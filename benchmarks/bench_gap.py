@@ -145,6 +145,18 @@ the walls' impact positions), a speed law at 11.8 mm named asym (constants per w
 leave 2 %), a clearance error at 10.7 mm (nominal 2.5) called none; pair: an
 asym + friction orbit without impacts named friction. Every case detectable.
 
+Then (gap13) the tilt's search is retried from the other initial ball speeds where a
+trial leaves the recording's attractor (``fit.tilt_starts``, ``ATTRACTOR_JUMP`` /
+``ATTRACTOR_LOST`` / ``RETRY_FACTOR``): the tilt-clearance confusion of 5077/9341 was
+mostly not a tie but a tilt fitted on the other member of a near-mirror pair (5077 #15,
+#3: closed-form starts within 0.05 deg of the truth, fits at the window's edge with gaps
+11503 / 2122). Spent 5077 #3 unexplained -> inclination; 5077 #15 and 9341 #3 (compliant)
+stay clearance. Tuning draws 11001 / 11003 (tilts and clearance errors of ``--drawn 48``
+plus 8 more tilts): right before and after (24/24). Check seed 11007 (``--drawn 24``,
+before -> after): top-1 16/16 -> 16/16, none 4/4, pairs 1/2 -> 2/2 (a multi_ipc
+asym + tilt now both named), coverage 23/29 = 0.793 -> 25/30 = 0.833, simulations 4368
+-> 4812 (+10 %).
+
 Usage::
 
     python benchmarks/bench_gap.py [--quick | --ci | --drawn N] [--n-jobs 2] [--seed 0]
