@@ -525,3 +525,18 @@ def test_outside_the_training_domain_warns(default_model):
     warn = default_model.domain_warnings(feats)
     assert len(warn) == 1 and warn[0].startswith(
         "feature dt_max = 1000 outside the training range [")
+
+
+def test_a_case_the_integrator_gives_up_on_is_dropped_not_fatal(monkeypatch):
+    """A drawn compliant case whose integrator fails (odeint, seed 12005) is a dropped
+    row with the reason, not an exception that stops a whole ``generate``."""
+    import vidiscover.workflows as wf
+    from vidiscover import SimulationError
+    from vidiscover.regimes.dataset import draw_cases, simulate_case
+
+    def fail(*args, **kwargs):
+        raise SimulationError("compliant engine: odeint failed at t = 1 s: excess work done")
+
+    monkeypatch.setattr(wf, "simulate_to_memory", fail)
+    row = simulate_case(draw_cases(1, seed=5)[0])
+    assert row["label"] is None and row["status"].startswith("error: compliant engine")

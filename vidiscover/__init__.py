@@ -27,6 +27,7 @@ _LAZY = {
     "RestitutionLaw": "restitution_laws",
     "SensorConfig": "sensors",
     "SimOptions": "simulation",
+    "SimulationError": "errors",
     "SimulationResult": "simulation",
     "SystemParams": "params",
     "analyze": "analysis",

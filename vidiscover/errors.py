@@ -7,7 +7,7 @@ one-line message naming *what* is wrong, *where* (file, column, parameter) and
 
 from __future__ import annotations
 
-__all__ = ["InputError"]
+__all__ = ["InputError", "SimulationError"]
 
 
 class InputError(ValueError):
@@ -18,3 +18,11 @@ class InputError(ValueError):
 
     def __init__(self, message: str) -> None:
         super().__init__(" ".join(str(message).split()))
+
+
+class SimulationError(RuntimeError):
+    """A simulation that could not be carried through (an integrator that gave up).
+
+    Not the user's input: a drawn case of a training or benchmark set may hit it, and
+    the set then records the case as dropped with this message instead of stopping.
+    """

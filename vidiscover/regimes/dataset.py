@@ -33,7 +33,7 @@ from dataclasses import asdict, dataclass, field, fields, replace
 import numpy as np
 import pandas as pd
 
-from ..errors import InputError
+from ..errors import InputError, SimulationError
 from .labels import LABELS
 
 __all__ = ["PARAM_RANGES", "Case", "draw_cases", "draw_realism_cases", "simulate_case",
@@ -316,7 +316,9 @@ def simulate_case(case: Case) -> dict:
         if pulse is None:
             pulse = _training_pulse(sensors, truth)
         out = analyze(rec, n_boot=_N_BOOT, seed=case.seed, pulse=pulse, features=ALL_FEATURES)
-    except InputError as err:
+    except (InputError, SimulationError) as err:
+        # (a drawn compliant case the integrator gives up on is dropped, not fatal: it
+        # stopped a whole generate on seed 12005)
         row.update(label=None, status=f"error: {err}")
         return row
     feats = out.features

@@ -61,7 +61,7 @@ from scipy.integrate import odeint, solve_ivp
 from scipy.optimize import brentq
 
 from ..effects import Effects
-from ..errors import InputError
+from ..errors import InputError, SimulationError
 from ..params import G_ACCEL, SystemParams
 from .contact import ContactModel
 from .engine import SimOptions, _Loop, _Model, initial_state, merge_options
@@ -880,7 +880,7 @@ class _CompliantLoop(_Loop):
         Y, info = odeint(self.flow, X0, grid, tfirst=True, rtol=self.rtol, atol=self.atol,
                          full_output=True, mxstep=100000, h0=0.25 * (grid[1] - grid[0]))
         if info["message"] != "Integration successful.":
-            raise RuntimeError(f"compliant engine: odeint failed at t = {grid[0]:.9g} s: "
+            raise SimulationError(f"compliant engine: odeint failed at t = {grid[0]:.9g} s: "
                                f"{info['message']}")
         return Y
 
