@@ -2,12 +2,15 @@
 
 Speed: :func:`vidiscover.analysis.analyze` without figures on one 5.12 s
 recording of the paper preset at b = 9 mm (asymmetric walls 0.88/0.20, default
-sensors), ``N`` runs after one warm-up, median and best wall-clock time and the
-best CPU time, with the bootstrap at its default (``n_boot=1000``) and small
-(100, 0), printed next to the 20 ms target as a ratio (<= 1 meets it), plus the
-time of each stage. On a shared machine the wall-clock median follows the load;
-the best run and the CPU time are the figures to compare with the target, and
-the load average is printed.
+sensors) with its pulse response known (``pulse=PulseModel()``, the exact engine's
+default sensors, as ``bench_cli.py`` times it), ``N`` runs after one warm-up, median
+and best wall-clock time and the best CPU time, with the bootstrap at its default
+(``n_boot=1000``) and small (100, 0), printed next to DESIGN.md section 8's 6 ms target
+as a ratio (<= 1 meets it; the verdict is on ``n_boot=0``, the figure ``bench_cli.py``
+quotes), plus the time of each stage; and, without a target, the default analysis of a
+recording of unknown instrument, which learns its pulse response first. On a shared
+machine the wall-clock median follows the load; the best run and the CPU time are the
+figures to compare with the target, and the load average is printed.
 
 Accuracy (issue 3 figures), per case: impact detection precision and recall on
 the detectable true impacts (:func:`vidiscover.analysis.detection_scores`),
@@ -44,6 +47,7 @@ from analysis_sim import ASYM, true_r_rms  # noqa: E402
 from vidiscover import Effects, SensorConfig, preset, record, simulate  # noqa: E402
 from vidiscover.analysis import (  # noqa: E402
     MU_TABLE,
+    PulseModel,
     analyze,
     detect_impacts,
     detection_scores,
@@ -54,7 +58,7 @@ from vidiscover.analysis import (  # noqa: E402
 )
 from vidiscover.params import G_ACCEL  # noqa: E402
 
-TARGET = 20e-3            # s, DESIGN.md section 8
+TARGET = 6e-3             # s, DESIGN.md section 8 (in-process, no figures, pulse known)
 SETTLE = 10.0             # s of transient simulated before the record
 FIGURES = {"precision": 0.99, "recall": 0.99, "timing_median": 30e-6, "r_rms_diff": 0.02,
            "ball_rms": 0.5e-3}
@@ -93,16 +97,20 @@ def timed(fn, n: int) -> dict:
 
 def speed(rec, n: int) -> dict:
     out = {}
+    known = PulseModel()
     for nb in (1000, 100, 0):
-        out[f"analyze n_boot={nb}"] = timed(lambda nb=nb: analyze(rec, n_boot=nb), n)
-    det = detect_impacts(rec)
+        out[f"analyze n_boot={nb}"] = timed(lambda nb=nb: analyze(rec, n_boot=nb, pulse=known),
+                                            n)
+    det = detect_impacts(rec, pulse=known)
     recon = reconstruct(det, rec)
-    out["  stage 1 detect_impacts"] = timed(lambda: detect_impacts(rec), n)
+    out["  stage 1 detect_impacts"] = timed(lambda: detect_impacts(rec, pulse=known), n)
     out["  stage 2 reconstruct"] = timed(lambda: reconstruct(det, rec), n)
     out["  stage 3 restitution (n_boot=1000)"] = timed(
         lambda: estimate_restitution(recon, det, n_boot=1000), n)
     out["  forcing + return map"] = timed(
         lambda: return_map(det.t, det.side, fit_forcing(rec.t, rec.xe, 8.0).period), n)
+    out["analyze n_boot=0, pulse learned"] = timed(lambda: analyze(rec, n_boot=0),
+                                                    max(3, n // 10))
     return out
 
 
@@ -219,9 +227,15 @@ def main(argv=None) -> int:
     print(f"{'':38s} {'median':>8s} {'best':>8s} {'cpu best':>9s} {'ratio best':>11s} "
           f"{'ratio cpu':>10s}")
     for k, v in sp.items():
+        learned = "learned" in k
         print(f"{k:38s} {v['median'] * 1e3:6.1f}ms {v['best'] * 1e3:6.1f}ms "
-              f"{v['cpu_best'] * 1e3:7.1f}ms {v['best'] / TARGET:11.2f} "
-              f"{v['cpu_best'] / TARGET:10.2f}")
+              f"{v['cpu_best'] * 1e3:7.1f}ms "
+              + ("   (no target: the pulse response is learned first)" if learned else
+                 f"{v['best'] / TARGET:11.2f} {v['cpu_best'] / TARGET:10.2f}"))
+    v = sp["analyze n_boot=0"]
+    print(f"verdict (n_boot=0, pulse known): median {v['median'] * 1e3:.2f} ms, target <= "
+          f"{TARGET * 1e3:g} ms: {'MET' if v['median'] <= TARGET else 'MISSED'} (measure on "
+          "an idle machine)")
     print("\naccuracy against simulated truth (r_right 0.88, r_left 0.20, default sensors); "
           "figures: precision, recall >= 0.99, median timing <= 30 us, |r RMS est - true| "
           "<= 0.02, ball RMS <= 0.5 mm (asked at 9 mm)")
