@@ -83,6 +83,7 @@ from ._table import check_columns, empty_columns, to_frame
 from .pulse import PulseModel, PulseResponse, _tail_envelope, learn_pulse
 from .signals import (
     _fill_in_place,
+    bridge_run,
     check_recording,
     clipped_mask,
     fill_gaps,
@@ -743,7 +744,6 @@ def _bridge_saturated(y: np.ndarray, mask: np.ndarray, sat: np.ndarray, longest:
     its error came back as trains of weak false pulses) or with too few samples
     about them keep their straight bridge.
     """
-    n = y.size
     runs = true_runs(mask)
     starts = np.array([lo for lo, _ in runs])
     done = set()
@@ -753,17 +753,8 @@ def _bridge_saturated(y: np.ndarray, mask: np.ndarray, sat: np.ndarray, longest:
             continue
         done.add(r)
         lo, hi = runs[r]
-        if lo == 0 or hi == n or hi - lo > longest:
-            continue
-        k = max((hi - lo + 1) // 2, 8)
-        ctx = np.r_[max(lo - k, 0):lo, hi:min(hi + k, n)]
-        ctx = ctx[~mask[ctx]]
-        if ctx.size < degree + 3 or not (ctx < lo).any() or not (ctx >= hi).any():
-            continue
-        mid, scale = 0.5 * (lo + hi - 1), float(k + hi - lo)
-        V = np.vander((ctx - mid) / scale, degree + 1)
-        coef = np.linalg.lstsq(V, y[ctx], rcond=None)[0]
-        y[lo:hi] = np.vander((np.arange(lo, hi) - mid) / scale, degree + 1) @ coef
+        if hi - lo <= longest:
+            bridge_run(y, y, mask, lo, hi, degree)
 
 
 def _rail_runs_long(a: np.ndarray, clip: np.ndarray) -> bool:

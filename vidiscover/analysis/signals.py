@@ -286,20 +286,34 @@ def bridge_gaps(y: np.ndarray, bad: np.ndarray, degree: int = 4) -> np.ndarray:
     out = fill_gaps(y, bad)
     if not bad.any():
         return out
-    n = out.size
     for lo, hi in true_runs(bad):
-        if lo == 0 or hi == n:
-            continue
-        k = max((hi - lo + 1) // 2, 8)
-        ctx = np.r_[max(lo - k, 0):lo, hi:min(hi + k, n)]
-        ctx = ctx[~bad[ctx]]
-        if ctx.size < degree + 3 or not (ctx < lo).any() or not (ctx >= hi).any():
-            continue
-        mid, scale = 0.5 * (lo + hi - 1), float(k + hi - lo)
-        V = np.vander((ctx - mid) / scale, degree + 1)
-        coef = np.linalg.lstsq(V, y[ctx], rcond=None)[0]
-        out[lo:hi] = np.vander((np.arange(lo, hi) - mid) / scale, degree + 1) @ coef
+        bridge_run(y, out, bad, lo, hi, degree)
     return out
+
+
+def bridge_run(y: np.ndarray, out: np.ndarray, bad: np.ndarray, lo: int, hi: int,
+               degree: int = 4) -> bool:
+    """Bridge the run ``[lo, hi)`` of ``out`` by a local polynomial through ``y``.
+
+    The least-squares polynomial of ``degree`` through the good samples of ``y`` on
+    both sides of the run (half as many on each side as the run is long, at least
+    8), written into ``out[lo:hi]`` (``out`` may be ``y``). Returns False, leaving
+    ``out`` as it is, for a run at an end of the record or with fewer than
+    ``degree + 3`` good samples about it, or none on one side.
+    """
+    n = y.size
+    if lo == 0 or hi == n:
+        return False
+    k = max((hi - lo + 1) // 2, 8)
+    ctx = np.r_[max(lo - k, 0):lo, hi:min(hi + k, n)]
+    ctx = ctx[~bad[ctx]]
+    if ctx.size < degree + 3 or not (ctx < lo).any() or not (ctx >= hi).any():
+        return False
+    mid, scale = 0.5 * (lo + hi - 1), float(k + hi - lo)
+    V = np.vander((ctx - mid) / scale, degree + 1)
+    coef = np.linalg.lstsq(V, y[ctx], rcond=None)[0]
+    out[lo:hi] = np.vander((np.arange(lo, hi) - mid) / scale, degree + 1) @ coef
+    return True
 
 
 def savgol_taps(win: int, polyorder: int, deriv: int = 0, delta: float = 1.0,
