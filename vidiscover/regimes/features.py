@@ -404,29 +404,15 @@ def _impact_period_error(ctx: FeatureContext) -> float:
     chaotic) motion whose stroboscopic LO state repeats to within the reconstruction's
     error still shows here.
     """
-    m = _strong(ctx)
-    t, side = np.asarray(ctx.t, float)[m], ctx.side[m]
-    T = ctx.period
-    if t.size < 8 or not T > 0:
-        return _NAN
-    half = 0.5 * (ctx.t_start + ctx.t_end)
-    best = _NAN
-    for p in range(1, 5):
-        errs = []
-        for s in ("right", "left"):
-            ts = t[side == s]
-            src = ts[(ts >= half) & (ts + p * T <= ctx.t_end - 0.5 * T)]
-            if not src.size:
-                continue
-            want = src + p * T
-            j = np.clip(np.searchsorted(ts, want), 1, ts.size - 1)
-            d = np.minimum(np.abs(ts[j] - want), np.abs(ts[j - 1] - want))
-            errs.append(np.minimum(d / T, 0.5))
-        if not errs:
-            continue
-        e = float(np.percentile(np.concatenate(errs), 90))
-        best = e if not (best <= e) else best
-    return best
+    def wall(ts, av, src, shift, T):
+        if not src.any():
+            return None
+        want = ts[src] + shift
+        j = np.clip(np.searchsorted(ts, want), 1, ts.size - 1)
+        d = np.minimum(np.abs(ts[j] - want), np.abs(ts[j - 1] - want))
+        return np.minimum(d / T, 0.5)
+
+    return _repeat_error(ctx, wall)
 
 
 def _impact_dv_error(ctx: FeatureContext) -> float:
@@ -435,6 +421,27 @@ def _impact_dv_error(ctx: FeatureContext) -> float:
     As ``impact_period_error``, the relative change of |dv| to the impact nearest
     p periods later on the same wall (1 when none is within a tenth of a period),
     90th percentile, smallest over p.
+    """
+    def wall(ts, av, src, shift, T):
+        if not src.any() or ts.size < 2:
+            return None
+        want = ts[src] + shift
+        j = np.clip(np.searchsorted(ts, want), 1, ts.size - 1)
+        j = np.where(np.abs(ts[j - 1] - want) < np.abs(ts[j] - want), j - 1, j)
+        near = np.abs(ts[j] - want) <= 0.1 * T
+        rel = np.abs(av[j] - av[src]) / np.maximum(av[src], 1e-300)
+        return np.where(near, np.minimum(rel, 1.0), 1.0)
+
+    return _repeat_error(ctx, wall)
+
+
+def _repeat_error(ctx: FeatureContext, wall) -> float:
+    """Smallest over p <= 4 of the 90th percentile of the strong impacts' repeat errors.
+
+    ``wall(ts, abs_dv, src, p T, T)`` gives, for one wall's strong impacts (times
+    ``ts``, ``|dv|``), the errors of those in ``src`` (the last half of the record,
+    with p periods after them inside it) against the impacts p periods later, or None.
+    NaN with fewer than 8 strong impacts or no forcing period.
     """
     m = _strong(ctx)
     t, side, a = np.asarray(ctx.t, float)[m], ctx.side[m], np.abs(np.asarray(ctx.dv, float))[m]
@@ -447,16 +454,11 @@ def _impact_dv_error(ctx: FeatureContext) -> float:
         errs = []
         for s in ("right", "left"):
             w = side == s
-            ts, av = t[w], a[w]
+            ts = t[w]
             src = (ts >= half) & (ts + p * T <= ctx.t_end - 0.5 * T)
-            if not src.any() or ts.size < 2:
-                continue
-            want = ts[src] + p * T
-            j = np.clip(np.searchsorted(ts, want), 1, ts.size - 1)
-            j = np.where(np.abs(ts[j - 1] - want) < np.abs(ts[j] - want), j - 1, j)
-            near = np.abs(ts[j] - want) <= 0.1 * T
-            rel = np.abs(av[j] - av[src]) / np.maximum(av[src], 1e-300)
-            errs.append(np.where(near, np.minimum(rel, 1.0), 1.0))
+            e = wall(ts, a[w], src, p * T, T)
+            if e is not None:
+                errs.append(e)
         if not errs:
             continue
         e = float(np.percentile(np.concatenate(errs), 90))
