@@ -9,10 +9,7 @@ within 0.5 ms of the contact entry; the analysis learns the instrument.
 from __future__ import annotations
 
 import numpy as np
-
-from vidiscover.analysis import PulseModel, contact_dv, detect_impacts, detectable
-from vidiscover.analysis.validation import match_impacts_by_wall
-from vidiscover.corpus import realism_case
+from corpus_scoring import episodes
 
 
 def test_a_chatter_run_s_curved_smooth_part_is_not_learned_as_ringing():
@@ -25,18 +22,7 @@ def test_a_chatter_run_s_curved_smooth_part_is_not_learned_as_ringing():
     impact of SNR 170 in every cycle (190 of 240 found). Without the window's curvature
     the envelope is 0.02-0.05 there: 200 found, none false. (The last re-impact, 3.3
     samples after the previous one at 0.4 of it, is still missed.)"""
-    case = realism_case("holdout4", 15)
-    sim = case.simulate(label=False)
-    rec, imp = sim.recording, sim.truth.impacts
-    fs = rec.sample_rate
-    det = detect_impacts(rec, mu=case.mu)
-    s = case.sensors
-    true_filter = PulseModel(cutoff=s["aa_cutoff"] / fs, kind=s["anti_alias"],
-                             order=s["aa_order"])
-    dv = contact_dv(imp.v_in, imp.v_out, case.m1, case.m2)
-    ok = detectable(imp.t_in, dv, float(s["a_noise"]), fs,
-                    cutoff=true_filter.peak(fs) / (2 * fs))
-    ie, it = match_impacts_by_wall(det.t, det.side, imp.t_in, imp.side)
+    imp, ok, det, ie, it = episodes("holdout4", 15)
     assert ok.sum() == 240
     assert ok[it].sum() >= 198                                # measured 200, was 190
     assert ie.size == det.n                                   # none false

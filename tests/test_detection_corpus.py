@@ -8,32 +8,8 @@ wall within 0.5 ms of the contact entry; the analysis learns the instrument.
 
 from __future__ import annotations
 
-import functools
-
 import numpy as np
-
-from vidiscover.analysis import PulseModel, analyze, contact_dv, detectable
-from vidiscover.analysis.validation import match_impacts_by_wall
-from vidiscover.corpus import realism_case
-
-
-@functools.cache
-def _episodes(split: str, index: int):
-    """Truth, detectable episodes, detection and matches of one corpus case."""
-    case = realism_case(split, index)
-    sim = case.simulate(label=False)
-    rec, imp = sim.recording, sim.truth.impacts
-    fs = rec.sample_rate
-    det = analyze(rec, flight_law=(case.mu, case.theta), n_boot=0).detection
-    s = case.sensors
-    kind = s.get("anti_alias", "linear-phase")
-    true_filter = (PulseModel() if kind == "linear-phase" else
-                   PulseModel(cutoff=s["aa_cutoff"] / fs, kind=kind, order=s["aa_order"]))
-    dv = contact_dv(imp.v_in, imp.v_out, case.m1, case.m2)
-    ok = detectable(imp.t_in, dv, float(s.get("a_noise", 0.05)), fs,
-                    cutoff=true_filter.peak(fs) / (2 * fs))
-    ie, it = match_impacts_by_wall(det.t, det.side, imp.t_in, imp.side)
-    return imp, ok, det, ie, it
+from corpus_scoring import episodes
 
 
 def test_periodic_re_impacts_are_not_taken_for_the_instrument_s_ringing():
@@ -43,7 +19,7 @@ def test_periodic_re_impacts_are_not_taken_for_the_instrument_s_ringing():
     ringing (0.2 of the peak at lags 15-19) and the detector dropped all 80 re-impacts
     (80 of 160 found). The re-impacts are now taken out of the learning windows as
     copies of the response: 159 of 160 found, none false."""
-    imp, ok, det, ie, it = _episodes("test", 50)
+    imp, ok, det, ie, it = episodes("test", 50)
     assert ok.sum() == 160
     assert ok[it].sum() >= 158                                # measured 159, was 80
     assert ie.size == det.n                                   # none false
@@ -57,7 +33,7 @@ def test_a_coarse_adc_s_smooth_troughs_are_not_clipped_pulses():
     Read as clipped pulses they gave 4 false impacts (SNR 6-38) 6.5-6.7 ms before right
     impacts (84 for 80). Within 1.3 noise sigmas of the smooth part, they are no clip;
     the 2-sample clipped tops of the strong pulses (1050 sigmas above it) still are."""
-    imp, ok, det, ie, it = _episodes("test", 56)
+    imp, ok, det, ie, it = episodes("test", 56)
     assert ok.sum() == 80 and ok[it].all()
     assert det.n == ie.size == 80                             # was 84, 4 false
     assert 0 < det.n_clipped < 98                             # was 98 (71 trough runs)
@@ -71,7 +47,7 @@ def test_a_long_hunt_crossley_contact_behind_a_butterworth_filter_is_one_impact(
     the first (185 detections for 175 episodes, 11 false). A longer-contact variant of
     the learned pulse is now fitted where it explains that residual: one impact per
     contact, the entries 87 us from the truth instead of 187."""
-    imp, ok, det, ie, it = _episodes("dev", 72)
+    imp, ok, det, ie, it = episodes("dev", 72)
     assert ok.sum() == 175
     assert ok[it].sum() >= 173                                # measured 174, was 174
     assert det.n - ie.size <= 1                               # measured 0 false, was 11
@@ -84,7 +60,7 @@ def test_a_wall_with_few_strong_pulses_gets_its_own_contact_duration():
     wall's, too few for its own contact duration; it took the left wall's tau 0 and its
     2-sample contacts were timed 0.87 sample late (median 278 us over both walls). The
     next level (SNR 20) is now tried for it: 18 right pulses of 40, tau 1.9 samples."""
-    imp, ok, det, ie, it = _episodes("dev", 33)
+    imp, ok, det, ie, it = episodes("dev", 33)
     fs = det.sample_rate
     assert det.response.model.tau * fs > 1.0                  # measured 1.9, was 0
     assert ok[it].sum() >= 131                                # measured 132 of 134, was 132

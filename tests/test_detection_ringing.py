@@ -14,9 +14,9 @@ import dataclasses
 
 import numpy as np
 import pytest
+from corpus_scoring import episodes, scored
 
-from vidiscover.analysis import PulseModel, analyze, contact_dv, detect_impacts, detectable
-from vidiscover.analysis.validation import match_impacts_by_wall
+from vidiscover.analysis import analyze
 from vidiscover.corpus import realism_case
 
 
@@ -30,12 +30,8 @@ def _ringing_instrument(index: int) -> dict:
     case = dataclasses.replace(case, sensors=sensors)
     sim = case.simulate(label=False)
     rec, imp = sim.recording, sim.truth.impacts
-    fs = rec.sample_rate
     det = analyze(rec, flight_law=(case.mu, case.theta), n_boot=0).detection
-    peak = PulseModel(cutoff=sensors["aa_cutoff"] / fs, kind="bessel", order=2).peak(fs)
-    dv = contact_dv(imp.v_in, imp.v_out, case.m1, case.m2)
-    ok = detectable(imp.t_in, dv, sensors["a_noise"], fs, cutoff=peak / (2 * fs))
-    ie, it = match_impacts_by_wall(det.t, det.side, imp.t_in, imp.side)
+    dv, ok, ie, it = scored(case, rec, imp, det)
     return {"precision": ie.size / det.n, "recall": ok[it].sum() / ok.sum(),
             "max_dv": float(np.max(np.abs(det.columns["dv"]))),
             "true_dv": float(np.max(np.abs(dv)))}
@@ -62,16 +58,7 @@ def test_a_filter_s_ringing_past_the_kernel_s_support_is_not_an_impact():
     66 samples after each clipped left impact of SNR 8000 was fitted as a pulse of
     SNR 7-10 (253 found for 240, 13 false). The wall's model response past the support
     is now its error there too: 240 found, none false."""
-    case = realism_case("holdout4", 28)
-    sim = case.simulate(label=False)
-    rec, imp = sim.recording, sim.truth.impacts
-    fs = rec.sample_rate
-    det = detect_impacts(rec, mu=case.mu)
-    s = case.sensors
-    peak = PulseModel(cutoff=s["aa_cutoff"] / fs, kind="cheby1", order=s["aa_order"]).peak(fs)
-    dv = contact_dv(imp.v_in, imp.v_out, case.m1, case.m2)
-    ok = detectable(imp.t_in, dv, float(s["a_noise"]), fs, cutoff=peak / (2 * fs))
-    ie, it = match_impacts_by_wall(det.t, det.side, imp.t_in, imp.side)
+    imp, ok, det, ie, it = episodes("holdout4", 28)
     assert ok.sum() == 240
     assert ok[it].sum() == 240                                 # measured 240
     assert det.n - ie.size <= 1                # measured 0, was 13 (16 before 29781a3)
