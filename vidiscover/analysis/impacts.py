@@ -1135,18 +1135,12 @@ def _matched(resid: np.ndarray, mf: list[np.ndarray]) -> np.ndarray:
 
 
 def _take_larger(z0: np.ndarray, z1: np.ndarray, keep_ties: bool) -> None:
-    """The larger in magnitude of ``z0`` and ``z1``, into ``z0`` (in place, by blocks).
+    """The larger in magnitude of the float64 arrays ``z0`` and ``z1``, into ``z0`` (in place).
 
     ``z0 = where(|z0| >= |z1|, z0, z1)`` if ``keep_ties``, else
     ``z0 = where(|z1| > |z0|, z1, z0)``.
     """
-    if z0.dtype != np.float64 or z1.dtype != np.float64:
-        for lo in range(0, z0.size, _BLOCK):
-            a, b = z0[lo:lo + _BLOCK], z1[lo:lo + _BLOCK]
-            take = ~(np.abs(a) >= np.abs(b)) if keep_ties else np.abs(b) > np.abs(a)
-            np.copyto(a, b, where=take)
-        return
-    # float64: the choice made on the bits, a ^= (a ^ b) & -take, instead of a masked
+    # the choice made on the float64 bits, a ^= (a ^ b) & -take, instead of a masked
     # copy, whose branch on a random mask took 105 of 125 us on 32768 samples (the
     # values are the same bits)
     m = min(z0.size, _BLOCK)
@@ -1470,15 +1464,10 @@ class _Fitter:
         if self.n == 0:
             return
         for _ in range(iterations):
-            c, _ = self._split()
             delta, amp, wid, wild = self._fit_rows(base, np.arange(self.n))
-            pos = c + delta
-            ok = np.isfinite(pos) & np.isfinite(amp)
             near = self._near(wild)
             take = ~near | wild
-            self.pos = np.where(ok & take, pos, self.pos)
-            self.amp = np.where(take, np.where(ok, amp, 0.0), self.amp)
-            self.wid = np.where(take, np.where(ok, wid, 0), self.wid)
+            self._assign(np.flatnonzero(take), delta[take], amp[take], wid[take])
             if near.any():
                 # the neighbours of a diverged pulse (:meth:`_fit_rows`) are refitted in
                 # two half-sweeps (every other one in time order against the others'
@@ -1502,8 +1491,8 @@ class _Fitter:
         """
         if self.n == 0:
             return
-        k = np.rint(self.pos).astype(np.int64) + self.peak_at[(self.amp < 0).astype(np.int64)]
-        j = np.clip(k[:, None] + np.arange(-2, 3)[None, :], 0, self.n_samples - 1)
+        j = np.clip(self._peak_samples()[:, None] + np.arange(-2, 3)[None, :], 0,
+                    self.n_samples - 1)
         on = self.sat[j]
         readable = (~self.bad[j]).sum(axis=1)
         self.keep(~on[:, 1:4].any(axis=1) & ~(on.any(axis=1) & (readable < _SAT_READABLE)))
@@ -1519,12 +1508,15 @@ class _Fitter:
         """
         if self.n == 0:
             return 0
-        k = np.rint(self.pos).astype(np.int64) + self.peak_at[(self.amp < 0).astype(np.int64)]
-        j = np.clip(k[:, None] + np.arange(-self.hw, self.hw + 1)[None, :], 0,
-                    self.n_samples - 1)
+        j = np.clip(self._peak_samples()[:, None] + np.arange(-self.hw, self.hw + 1)[None, :],
+                    0, self.n_samples - 1)
         keep = ~self.sat[j].any(axis=1)
         self.keep(keep)
         return int((~keep).sum())
+
+    def _peak_samples(self) -> np.ndarray:
+        """The sample of each pulse's peak (its centre plus its wall's peak offset)."""
+        return np.rint(self.pos).astype(np.int64) + self.peak_at[(self.amp < 0).astype(np.int64)]
 
     def _near(self, wild: np.ndarray) -> np.ndarray:
         """Pulses within twice the rendered half-width of a ``wild`` one (none if none)."""
@@ -1540,8 +1532,15 @@ class _Fitter:
         """Refit the pulses ``rows`` against the current fits of all the others."""
         if rows.size == 0:
             return
-        c, _ = self._split()
         delta, amp, wid, _ = self._fit_rows(base, rows)
+        self._assign(rows, delta, amp, wid)
+
+    def _assign(self, rows: np.ndarray, delta, amp, wid) -> None:
+        """Take the fits of the pulses ``rows`` (delays from their centre samples).
+
+        A fit that is not finite keeps the pulse's position and zeroes its area.
+        """
+        c, _ = self._split()
         pos = c[rows] + delta
         ok = np.isfinite(pos) & np.isfinite(amp)
         P, A, K = self.pos.copy(), self.amp.copy(), self.wid.copy()
