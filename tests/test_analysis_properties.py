@@ -24,7 +24,7 @@ from hypothesis import strategies as st
 from vidiscover import InputError, Metadata, Recording
 from vidiscover.analysis import AnalysisResult, PulseModel, analyze
 from vidiscover.analysis.restitution import R_MAX
-from vidiscover.analysis.signals import MAX_ACCELERATION, MAX_DISPLACEMENT, MIN_SAMPLES
+from vidiscover.analysis.signals import MAX_ACCELERATION, MAX_DISPLACEMENT, MIN_SAMPLES, max5
 from vidiscover.sensors import pulse_kernel
 
 FS = 6400.0
@@ -379,3 +379,12 @@ def test_overwrite_removes_the_offsets_in_place_with_the_same_numbers():
     assert moved._recording.a is rec.a and not rec.a.flags.writeable
     np.testing.assert_array_equal(rec.a, a0 - kept.offsets.a_bias)
     np.testing.assert_array_equal(copy.a, a0)        # the default leaves it alone
+
+
+@given(st.lists(st.floats(-1e6, 1e6), min_size=1, max_size=40))
+def test_max5_is_the_maximum_of_the_cut_five_sample_window(values):
+    """``signals.max5`` (the detection's local maxima, the learned tail's envelope) is
+    exactly the maximum over i-2..i+2, the window cut at the ends."""
+    v = np.array(values)
+    want = [v[max(i - 2, 0):i + 3].max() for i in range(v.size)]
+    assert np.array_equal(max5(v), want)

@@ -88,6 +88,7 @@ from .signals import (
     clipped_mask,
     fill_gaps,
     good_sample,
+    max5,
     noise_sigma,
     release_freed_memory,
     robust_std,
@@ -1180,7 +1181,7 @@ def _candidates(z: np.ndarray, threshold: float, rel: float = 0.0, near=None,
     # many samples are above: the first round's 3400 of 32768 took 150 us gathered,
     # 20 us by shifted maxima)
     if above.size * 5 > az.size // 4:
-        keep = az[above] >= _max5(az)[above]
+        keep = az[above] >= max5(az)[above]
     else:
         keep = az[above] >= _max_around(az, above, 2)
     # ties (equal neighbours): keep the first
@@ -1205,15 +1206,6 @@ def _candidates(z: np.ndarray, threshold: float, rel: float = 0.0, near=None,
                           np.abs(idx - pos[np.clip(k, 0, pos.size - 1)]))
         idx = idx[(vi > threshold + raise_by) & (dist >= 1.5)]
     return idx.astype(float)
-
-
-def _max5(v: np.ndarray) -> np.ndarray:
-    """max(v[i - 2 : i + 3]) for every i (the window cut at the ends), by shifted maxima."""
-    p = np.empty(v.size + 4)
-    p[:2], p[-2:], p[2:-2] = v[0], v[-1], v        # the ends repeated: the cut windows' max
-    m = np.maximum(p[:-1], p[1:])                  # i, i + 1
-    m = np.maximum(m[:-2], m[2:])                  # i .. i + 3
-    return np.maximum(m[:-1], p[4:], out=m[:-1])   # i .. i + 4 of p: v[i - 2 .. i + 2]
 
 
 def _max_around(v: np.ndarray, idx: np.ndarray, half: int) -> np.ndarray:

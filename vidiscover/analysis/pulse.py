@@ -82,6 +82,7 @@ from ..errors import InputError
 from .signals import (
     bridge_gaps,
     fill_gaps,
+    max5,
     noise_sigma,
     savgol_smooth,
     smoother_window,
@@ -316,8 +317,7 @@ def _tail_envelope(model: PulseModel, fs: float) -> tuple[np.ndarray, np.ndarray
     if above.size == 0:
         return empty
     stop = above[-1] + 3
-    pad = np.pad(rel[:stop], 2)
-    env = np.max(np.stack([pad[i:i + stop] for i in range(5)]), axis=0)
+    env = max5(rel[:stop])
     keep = lags[:stop] > span
     return lags[:stop][keep], env[keep]
 

@@ -265,6 +265,18 @@ def _ranked(ok, m: int, step: int) -> np.ndarray:
     return np.concatenate(parts) if parts else np.zeros(0, dtype=np.int64)
 
 
+def max5(v: np.ndarray) -> np.ndarray:
+    """max(v[i - 2 : i + 3]) for every i of a non-empty ``v``, by shifted maxima.
+
+    The window is cut at the ends of ``v``.
+    """
+    p = np.empty(v.size + 4)
+    p[:2], p[-2:], p[2:-2] = v[0], v[-1], v        # the ends repeated: the cut windows' max
+    m = np.maximum(p[:-1], p[1:])                  # i, i + 1
+    m = np.maximum(m[:-2], m[2:])                  # i .. i + 3
+    return np.maximum(m[:-1], p[4:], out=m[:-1])   # i .. i + 4 of p: v[i - 2 .. i + 2]
+
+
 def true_runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """(start, stop) of the runs of True in ``mask``."""
     d = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
