@@ -175,6 +175,22 @@ def _single_linkage_labels(points: np.ndarray, radius: float) -> np.ndarray:
     return labels
 
 
+def cycle_counts(t: np.ndarray, cycles: np.ndarray) -> np.ndarray:
+    """Impacts at times ``t`` in each cycle ``[c_k, c_k+1)`` of the bounds ``cycles``.
+
+    The last bin is closed (as ``np.histogram``); a read-only array, empty for fewer
+    than two bounds.
+    """
+    if cycles.size < 2:
+        return np.zeros(0, dtype=np.int64)
+    t = np.sort(np.asarray(t, dtype=float))
+    k = np.searchsorted(t, cycles, side="left")
+    k[-1] = np.searchsorted(t, cycles[-1], side="right")
+    out = np.diff(k)
+    out.flags.writeable = False
+    return out
+
+
 @dataclass(frozen=True, eq=False)
 class FeatureContext:
     """What the feature functions see.
@@ -288,16 +304,7 @@ class FeatureContext:
 
     @functools.cached_property
     def _counts(self) -> np.ndarray:
-        c = self._cycles
-        if c.size < 2:
-            return np.zeros(0, dtype=np.int64)
-        # impacts in [c_k, c_k+1), the last bin closed (as np.histogram)
-        t = np.sort(np.asarray(self.t, dtype=float))
-        k = np.searchsorted(t, c, side="left")
-        k[-1] = np.searchsorted(t, c[-1], side="right")
-        out = np.diff(k)
-        out.flags.writeable = False
-        return out
+        return cycle_counts(self.t, self._cycles)
 
 
 class FeatureSet(Mapping):

@@ -40,7 +40,7 @@ import math
 
 import numpy as np
 
-from ..analysis.returnmap import ANALYSIS_FEATURES, FeatureContext, FeatureSet
+from ..analysis.returnmap import ANALYSIS_FEATURES, FeatureContext, FeatureSet, cycle_counts
 
 __all__ = ["REGIME_FEATURES", "ALL_FEATURES", "STATE_FEATURES", "IMPACT_FEATURES",
            "cycle_waveforms"]
@@ -356,13 +356,9 @@ def _strong_of(ctx: FeatureContext) -> np.ndarray:
 
 
 def _strong_counts(ctx: FeatureContext) -> np.ndarray:
-    c = ctx.cycles()
-    if c.size < 2:
-        return np.zeros(0, dtype=np.int64)
-    t = np.sort(np.asarray(ctx.t, float)[_strong(ctx)])
-    k = np.searchsorted(t, c, side="left")
-    k[-1] = np.searchsorted(t, c[-1], side="right")
-    return np.diff(k)
+    """Strong impacts per complete cycle (once per context)."""
+    return ctx.memo("strong_counts", lambda c: cycle_counts(np.asarray(c.t, float)[_strong(c)],
+                                                            c.cycles()))
 
 
 def _strong_ipc(ctx: FeatureContext) -> float:
