@@ -24,8 +24,8 @@ contacts (``+ equivalent impacts``: where the straight approach and rebound line
 z meet, ``t* = (u- t_in - u+ t_out) / (u- - u+)``, beyond the wall by ``u- (t* - t_in)``).
 The recordings are simulated again for their truth (the analyses come from the cache).
 
-Figures are quoted on the held-back ``holdout5`` split (``test`` and ``holdout`` to
-``holdout4`` were looked at case by case); ``--split dev`` is for tuning.
+Figures are quoted on the held-back ``holdout6`` split (``test`` and ``holdout`` to
+``holdout5`` were looked at case by case); ``--split dev`` is for tuning.
 
 Measured (holdout4, 60 cases, fresh analyses, 2026-11-26, run once): identified 1,
 within, bad 0 (0.017; target 0.9); the 59 others "not identified" (the flights do not
@@ -41,7 +41,7 @@ move theta by 0.2-1.6 deg (dev-000/002/007): the jumps, not the estimator, limit
 
 Usage::
 
-    python benchmarks/bench_realism_flight.py [--split holdout5] [--n 60] [--start 0]
+    python benchmarks/bench_realism_flight.py [--split holdout6] [--n 60] [--start 0]
         [--cache DIR] [--oracle]
 """
 
@@ -158,7 +158,7 @@ def score_case(case, cache: str | None = None, oracle: bool = False) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout5", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout6", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--cache", default=None,

@@ -35,7 +35,7 @@ law so that the impact law is scored on its own:
   at 1.4 times the speed is honest; one whose band is narrow and wrong is not. The
   target line is the strict share.
 
-Figures are quoted on the ``holdout5`` split (see :mod:`vidiscover.corpus`).
+Figures are quoted on the ``holdout6`` split (see :mod:`vidiscover.corpus`).
 Measured (holdout4, 60 cases, run once, 2026-11-26): constant-r walls reported
 constant 0.970 of 67; Hunt-Crossley walls within 0.03 at the third clearance 0.962 of
 52 (all 46 where the prediction is identified; true r inside the 95 % band at 0.894 of
@@ -52,7 +52,7 @@ the sensors or the analysis change.
 
 Usage::
 
-    python benchmarks/bench_realism_impact_law.py [--split holdout5] [--n 60] [--n-boot 200]
+    python benchmarks/bench_realism_impact_law.py [--split holdout6] [--n 60] [--n-boot 200]
         [--cache DIR]
 """
 
@@ -214,7 +214,7 @@ def band_half_width(law, v: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.n
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout5", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout6", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--n-boot", type=int, default=200,
