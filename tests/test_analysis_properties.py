@@ -362,6 +362,39 @@ def test_savgol_taps_are_scipys_savgol_coeffs_bit_for_bit(half, polyorder, deriv
     assert np.array_equal(savgol_taps(win, polyorder, deriv, delta, use=use), want)
 
 
+@settings(max_examples=40, deadline=None)
+@given(half=st.integers(2, 60), extra=st.integers(0, 400), seed=st.integers(0, 2**31 - 1))
+def test_savgol_smooth_is_scipys_savgol_filter(half, extra, seed):
+    """savgol_smooth (numpy's direct correlation inside, the cubic edge projections at
+    the ends) is scipy's savgol_filter(y, win, 3, mode="interp") to rounding."""
+    from scipy.signal import savgol_filter
+
+    from vidiscover.analysis.signals import savgol_smooth
+
+    win = 2 * half + 1
+    y = np.cumsum(np.random.default_rng(seed).normal(size=win + extra))
+    want = savgol_filter(y, win, 3, mode="interp")
+    got = savgol_smooth(y, win)
+    assert np.allclose(got, want, rtol=0, atol=1e-12 * (1 + np.abs(y).max()))
+
+
+@settings(max_examples=40, deadline=None)
+@given(half=st.integers(2, 60), dt=st.floats(1e-5, 1e-2), seed=st.integers(0, 2**31 - 1))
+def test_offsets_slope_is_the_least_squares_cubics_derivative(half, dt, seed):
+    """The end velocities of estimate_offsets: the derivative at the centre of a
+    least-squares cubic (polyfit's), exact on a cubic, to rounding on noise."""
+    from vidiscover.analysis.signals import _slope
+
+    rng = np.random.default_rng(seed)
+    s = (np.arange(2 * half + 1) - half) * dt
+    y = rng.normal(size=s.size)
+    c = np.polynomial.polynomial.polyfit(s / (half * dt), y, 3)
+    assert _slope(y, dt) == pytest.approx(c[1] / (half * dt), rel=1e-9, abs=1e-9 / dt)
+    cubic = 0.3 + 2.0 * s - 40.0 * s ** 2 + 7.0 * s ** 3
+    assert _slope(cubic, dt) == pytest.approx(2.0, rel=1e-9)
+    assert np.isnan(_slope(np.r_[y[:-1], np.nan], dt))
+
+
 def test_overwrite_removes_the_offsets_in_place_with_the_same_numbers():
     """``analyze(..., overwrite=True)`` (what the command does with the recordings it
     read) subtracts the offsets in the recording's own arrays: the same analysis, one
