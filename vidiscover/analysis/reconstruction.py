@@ -959,5 +959,9 @@ def _penetration(t, x_f, ts, te, t_release, y_release, w_line, ss, b, traj, mu, 
             y = Y[fl, i0] * (1 - f) + Y[fl, i0 + 1] * f
         z = y - x_lo
         exc = np.maximum(np.abs(z) - b, 0.0)
-        np.maximum.at(out, fl, exc)
+        # each flight's samples are contiguous in ``exc``: its maximum by reduceat over
+        # the flights that have samples (exact, as the scattered maximum.at was)
+        has = np.flatnonzero(c > 0)
+        if has.size:
+            out[a - c.size + has] = np.maximum.reduceat(exc, (np.cumsum(c) - c)[has])
     return out
