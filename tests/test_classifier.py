@@ -378,15 +378,18 @@ def test_features_are_the_same_for_a_rig_at_another_scale():
 def test_rule_baseline_applies_the_design_rules():
     base = dict(impacts_per_cycle=2.0, impacting_cycle_share=1.0, envelope_modulation=0.01,
                 strobe_period_error=0.001, one_per_cycle_share=0.0, two_per_cycle_share=1.0,
-                alternation=1.0, asymmetry=0.3)
+                alternation=1.0, asymmetry=0.3, impact_period_error=math.nan)
     rows = [base, {**base, "asymmetry": 0.02}, {**base, "impacts_per_cycle": 0.0},
             {**base, "impacting_cycle_share": 0.5, "envelope_modulation": 0.3},
             {**base, "impacting_cycle_share": 0.5}, {**base, "strobe_period_error": 0.2},
             {**base, "two_per_cycle_share": 0.2}, {**base, "one_per_cycle_share": 0.95,
-                                                   "two_per_cycle_share": 0.0}]
+                                                   "two_per_cycle_share": 0.0},
+            # periodic, impacts in 2 of 3 cycles that repeat: multi_ipc, not chaotic
+            {**base, "impacting_cycle_share": 0.67, "impact_period_error": 0.001},
+            {**base, "impacting_cycle_share": 0.67, "impact_period_error": 0.05}]
     assert list(RuleBaseline().predict(pd.DataFrame(rows))) == [
         "2ipc_asym", "2ipc_sym", "no_impact", "smr", "chaotic", "chaotic", "multi_ipc",
-        "1ipc"]
+        "1ipc", "multi_ipc", "chaotic"]
 
 
 # --------------------------------------------------------------------------- shipped model

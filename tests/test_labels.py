@@ -77,6 +77,25 @@ def test_smr_needs_intermittency_and_modulation():
     assert flat.label == "chaotic"
 
 
+def test_periodic_impacts_in_some_cycles_are_multi_ipc_irregular_ones_chaotic():
+    """A periodic motion hitting in two of every three cycles (phi ~ 2/3, no modulation;
+    seed 14001 paper rig #38/#170/#271, period-3 orbits) is periodic, so not chaotic
+    (the README: chaotic is 'neither periodic nor SMR'): multi_ipc. The same counts at
+    irregular times (a ball grazing the wall of an LO whose state repeats) stay chaotic,
+    and so do impacts in irregular cycles."""
+    keep = [k for k in range(N_CYC) if k % 3]
+    t = np.array([k * T + 0.02 for k in keep])
+    s = np.where(np.arange(t.size) % 2, -1, 1)
+    per3 = (np.tile([1e-3, 2e-3, 3e-3], 14)[:N_CYC], np.tile([0.1, 0.2, 0.3], 14)[:N_CYC])
+    lab = _label(t, s, strobe=per3)
+    assert lab.periodic and lab.phi < 0.9 and lab.label == "multi_ipc"
+    jitter = np.random.default_rng(1).uniform(-0.05, 0.05, t.size) * T
+    assert _label(t + jitter, s, strobe=per3).label == "chaotic"
+    rng = np.random.default_rng(2)
+    some = np.array([k * T + 0.02 for k in range(N_CYC) if rng.random() < 0.6])
+    assert _label(some, np.ones(some.size), strobe=per3).label == "chaotic"
+
+
 def test_simulated_wide_clearance_is_two_symmetric_impacts():
     res = simulate(preset("paper", b=0.03), settle=10.0, duration=5.12)
     lab = label_simulation(res)

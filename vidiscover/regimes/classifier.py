@@ -230,20 +230,26 @@ class RuleBaseline:
     and the response is periodic (``strobe_period_error`` <= ``periodic_tol``):
     ``one_per_cycle_share`` >= 0.9 -> ``1ipc``; ``two_per_cycle_share`` >= 0.9 and
     ``alternation`` >= 0.9 -> ``2ipc_asym`` if ``asymmetry`` >= 0.1 else
-    ``2ipc_sym``; else ``multi_ipc``. Everything else is ``chaotic``.
+    ``2ipc_sym``; else ``multi_ipc``. A periodic response with a share below 0.9 is
+    ``multi_ipc`` too when the strong impacts repeat (``impact_period_error`` <=
+    ``repeat_tol`` periods; the labels' :func:`~vidiscover.regimes.labels.impacts_repeat`).
+    Everything else is ``chaotic``.
 
     Parameters
     ----------
     periodic_tol : float
         Largest stroboscopic change (relative to max |x|) that counts as periodic.
+    repeat_tol : float
+        Largest ``impact_period_error`` (periods) at which the impacts repeat.
     """
 
     periodic_tol: float = 0.01
+    repeat_tol: float = 0.01
     #: Features the rules read.
     FEATURES: ClassVar[tuple[str, ...]] = (
         "impacts_per_cycle", "impacting_cycle_share", "envelope_modulation",
         "strobe_period_error", "one_per_cycle_share", "two_per_cycle_share", "alternation",
-        "asymmetry")
+        "asymmetry", "impact_period_error")
 
     def predict(self, features: pd.DataFrame) -> np.ndarray:
         """Label every row of a DataFrame of features (columns named as in ALL_FEATURES)."""
@@ -255,10 +261,11 @@ class RuleBaseline:
             one = f["one_per_cycle_share"] >= 0.9
             two = (f["two_per_cycle_share"] >= 0.9) & (f["alternation"] >= 0.9)
             asym = np.nan_to_num(f["asymmetry"]) >= 0.1
+            repeat = f["impact_period_error"] <= self.repeat_tol
             out = np.select(
                 [ipc < 0.05, (phi < 0.9) & (f["envelope_modulation"] >= 0.15),
                  (phi >= 0.9) & periodic & one, (phi >= 0.9) & periodic & two & asym,
-                 (phi >= 0.9) & periodic & two, (phi >= 0.9) & periodic],
+                 (phi >= 0.9) & periodic & two, ((phi >= 0.9) | repeat) & periodic],
                 ["no_impact", "smr", "1ipc", "2ipc_asym", "2ipc_sym", "multi_ipc"],
                 "chaotic")
         return out.astype(object)
