@@ -449,9 +449,10 @@ def test_analysis_and_pulse_learning_do_not_import_scipy_signal():
     assert out == "[]"
 
 
-def _with_reimpacts(kind, seed=3, fs=2560.0, os=16, lag=6.75e-3, ratio=0.3):
+def _with_reimpacts(kind, seed=3, fs=2560.0, os=16, lag=6.75e-3, ratio=0.3, sos=None):
     """Impacts on alternate walls, each followed ``lag`` later by a re-impact on its wall
-    of ``ratio`` times its impulse (a periodic motion: every learning window holds one)."""
+    of ``ratio`` times its impulse (a periodic motion: every learning window holds one),
+    through ``sos`` (at ``fs * os``) or the instrument of ``kind``."""
     fo = fs * os
     rng = np.random.default_rng(seed)
     to = np.arange(int(3.0 * fs) * os) / fo
@@ -466,8 +467,9 @@ def _with_reimpacts(kind, seed=3, fs=2560.0, os=16, lag=6.75e-3, ratio=0.3):
     for ti, d in zip(t_in, dv):
         k = int(np.ceil(ti * fo))
         a[k:k + m] += d * np.pi / (2 * tau) * np.sin(np.pi * (np.arange(k, k + m) / fo - ti) / tau)
-    sos = (signal.cheby1(7, 1.0, 820.0, fs=fo, output="sos") if kind == "cheby1"
-           else signal.butter(6, 800.0, fs=fo, output="sos"))
+    if sos is None:
+        sos = (signal.cheby1(7, 1.0, 820.0, fs=fo, output="sos") if kind == "cheby1"
+               else signal.butter(6, 800.0, fs=fo, output="sos"))
     af = signal.sosfilt(sos, a, zi=signal.sosfilt_zi(sos) * a[0])[0][::os]
     af = af + 0.07 * rng.standard_normal(af.size)
     t = np.arange(af.size) / fs
@@ -489,3 +491,25 @@ def test_a_re_impact_in_every_learning_window_is_not_taken_for_ringing(kind):
     assert np.median(np.abs(det.t[ie] - t_in[it])) < 95e-6   # measured 75 (cheby1), 23 us
     env = det.response.error_at(np.arange(14.0, 21.0))
     assert env.max() < 0.03                                   # measured 0.014, was 0.27
+
+
+@pytest.mark.parametrize("lag", [3.9e-3, 4.7e-3])
+def test_a_re_impact_on_a_chebyshev_s_ringing_lobes_is_not_taken_for_ringing(lag):
+    # holdout5-022's second stage: a Chebyshev-1 of order 5 at 583 Hz (2560 Hz) rings
+    # above a tenth of its peak from -8 to +12 samples. Those lobes were taken for the
+    # main lobe, in which no other impact's copy is fitted in the learning windows, so
+    # a re-impact 10-12 samples on (0.23 of the pulse) stayed in the residual, the
+    # error envelope took it for ringing (0.17-0.20) and every re-impact was dropped
+    # (78 of 156 found at both lags). Only the contiguous lobe about the peak is
+    # excluded now
+    rec, t_in = _with_reimpacts("cheby1", lag=lag, ratio=0.23,
+                                sos=signal.cheby1(5, 1.0, 583.0, fs=2560.0 * 16,
+                                                  output="sos"))
+    det = detect_impacts(rec)
+    ie, it = match_impacts(det.t, t_in, 0.5e-3)
+    assert (det.response.model.kind, det.response.model.order) == ("cheby1", 5)
+    assert ie.size >= 152 and det.n - ie.size <= 1           # measured 152 and 154 of 156
+    assert np.median(np.abs(det.t[ie] - t_in[it])) < 110e-6  # measured 69, 100 us
+    env = det.response.error_at(np.arange(9.0, 14.0))
+    assert env.max() < 0.06                                   # measured 0.004, 0.039; was 0.2
+
