@@ -3,6 +3,8 @@ look behind unequal walls (slow: simulated cases)."""
 
 from __future__ import annotations
 
+import math
+
 import pytest
 
 from vidiscover.effects import Effects
@@ -263,3 +265,78 @@ def test_unequal_walls_without_a_tilt_get_no_tilt():
 
     model, walls = _walls_alone(extra_cases(0)[3])
     assert _tilt_look(model, walls, _here) == (None, 0)
+
+
+def _sig(right, left, err=0.0005):
+    from types import SimpleNamespace
+
+    return SimpleNamespace(values={"right.momentum": right, "left.momentum": left},
+                           errors={"right.momentum": err, "left.momentum": err})
+
+
+def _tilt_model(right, left):
+    from types import SimpleNamespace
+
+    real = _sig(right, left)
+    return SimpleNamespace(real=real, full=real, rep_var={})
+
+
+def test_the_tilt_reading_is_a_steady_force_on_both_walls():
+    from vidiscover.gap.diagnose import _tilt_reading
+
+    # spent draw 13001 #23 (compliant walls and a 2.3 deg tilt): both walls' residuals
+    # left by the walls alone, +0.026 / +0.025 m/s, on the floor 0.01 m/s: z^2 ~ 12.9
+    z2, steady = _tilt_reading(_tilt_model(0.0262, 0.0247), _sig(0.0, 0.0))
+    assert steady and z2 == pytest.approx(12.9, abs=0.1)
+    # compliant no-effect walls (calibration draws 7000, 7008): opposite signs, or one
+    # wall 3.2 times the other, are no steady force
+    assert not _tilt_reading(_tilt_model(-0.0355, 0.0343), _sig(0.0, 0.0))[1]
+    assert not _tilt_reading(_tilt_model(0.1597, 0.0497), _sig(0.0, 0.0))[1]
+    # a wall without a residual (no free flights beside its impacts): no reading
+    assert _tilt_reading(_tilt_model(0.03, 0.03), _sig(math.nan, 0.0)) == (0.0, False)
+
+
+def _read_fit(name, gap, n_params, right, left):
+    return CandidateFit(name=name, params={}, n_params=n_params, r=0.7, effects=Effects(),
+                        gap=GapComponents({"s": float(gap)}, {}), signature=_sig(right, left))
+
+
+def test_a_steady_force_left_by_the_walls_counts_for_a_pair_with_a_tilt():
+    from vidiscover.gap.diagnose import _parsimonious_pair, _steady_extra
+
+    model = _tilt_model(0.0262, 0.0247)
+    walls = _read_fit("asymmetric_restitution", 5.9, 2, 0.0, 0.0)
+    tilt = _read_fit("asymmetric_restitution+inclination", 2.0, 3, 0.025, 0.025)
+    # removes 3.9 on the statistics: not kept without the reading (see above) ...
+    assert not _keep_pair(walls, tilt, None)
+    # ... with it the walls leave 5.9 + 12.9, the pair 2.0 + 0.0
+    assert _keep_pair(walls, tilt, None, model)
+    # the reading only ever helps a pair with a tilt
+    other = _read_fit("asymmetric_restitution+clearance_error", 2.0, 3, 0.0, 0.0)
+    assert not _keep_pair(walls, other, None, model)
+    # no steady force left by the walls: no reading
+    assert not _keep_pair(walls, tilt, None, _tilt_model(0.0262, -0.0247))
+    # pairs are ranked with it (tuning draw 14003 #35: walls + a 0.13 mm clearance error
+    # 1.61 against walls + the tilt 2.59)
+    clear = _read_fit("asymmetric_restitution+clearance_error", 1.61, 3, 0.0, 0.0)
+    tilt = _read_fit("asymmetric_restitution+inclination", 2.59, 3, 0.024, 0.026)
+    assert _parsimonious_pair([clear, tilt]) is clear
+    assert _parsimonious_pair([clear, tilt], _steady_extra(model, walls)) is tilt
+
+
+@pytest.mark.slow
+def test_a_tilt_behind_exact_unequal_walls_is_read_from_the_momentum_residuals():
+    # spent draw 13007 #11: exact walls r 0.745 / 0.525 and a 3.43 deg tilt at 9.4 mm
+    # (2ipc_asym). The walls alone leave 3.75 (no pair search) and z^2 0.61 on the laser's
+    # statistic (no laser look); both walls' momentum residuals read the tilt: +0.037 /
+    # +0.036 m/s, z^2 ~ 26 on their noise scales
+    from vidiscover.gap.battery import drawn_cases
+    from vidiscover.gap.diagnose import SIGNIFICANT_DROP, _tilt_look, _tilt_reading
+
+    model, walls = _walls_alone(drawn_cases(13007, 24)[11])
+    assert walls.gap.total < SIGNIFICANT_DROP
+    read, steady = _tilt_reading(model, walls.signature)
+    assert steady and read > 20
+    pair, n = _tilt_look(model, walls, _here)
+    assert pair is not None and n > 0
+    assert 3.0 < pair.params["inclination"]["theta"] < 3.9     # 3.43 true
