@@ -153,6 +153,24 @@ def test_pulse_responses_are_pulse_response_row_by_row():
             assert np.abs(got[m] - ref).max() <= 1e-12 * np.abs(ref).max()
 
 
+@pytest.mark.parametrize("model", [PulseModel(), PulseModel(tau=0.3e-3),
+                                   PulseModel(kind="cheby1", order=4, cutoff=0.37)])
+def test_kernel_rows_at_delays_next_to_a_whole_sample(model):
+    """rows(j, delta) at delays a rounding away from a whole sample (a back-fit's
+    4e-17) equals the row at that sample: u - floor(u) rounds to 1.0 there, which read
+    a phase past the table and raised IndexError at the support's edge (a
+    clipped-pulse refit of an other-rig training case, seed 14003 #231)."""
+    fs = 10240.0
+    span = model.span(fs)
+    j = np.arange(-span - 8, span + 9)
+    for d in (4.16e-17, 1e-300, -4e-17, 2.0 + 4.4e-16, -3.0):
+        got = model.rows(j, np.array([d, 0.0]), fs)
+        ref = model.rows(j, np.array([round(d), 0.0]), fs)
+        # (1e-5 of the peak: a causal kernel's truncated tail at the support's last
+        # sample, 6e-6 of the peak for the Chebyshev, is read from one side only)
+        assert np.abs(got - ref).max() <= 1e-5 * np.abs(ref).max()
+
+
 def test_learned_response_at_a_high_sample_rate():
     rec, t_in, dv = _scipy_instrument(seed=1, fs=25600.0, kind="bessel", order=6, fc=3000.0,
                                       tau=0.3e-3, n_imp=40, os=4)

@@ -222,7 +222,9 @@ class PulseModel:
         u = -np.asarray(delta, dtype=float)
         fl = np.floor(u)
         ph = (u - fl) * _OVERSAMPLE
-        pi = ph.astype(np.int64)
+        # (u - fl rounds to 1.0 for a delay just above 0, e.g. 4e-17: the last phase's
+        # upper neighbour, row _OVERSAMPLE, with weight 1, not a row past the table)
+        pi = np.minimum(ph.astype(np.int64), _OVERSAMPLE - 1)
         w = (ph - pi)[:, None]
         m = j[None, :] + (self.span(fs) + 1 + _TABLE_PAD) + fl.astype(np.int64)[:, None]
         k = pi[:, None] * T.shape[1] + m          # T[row, m] and T[row + 1, m], flat
