@@ -159,20 +159,24 @@ asym + tilt now both named), coverage 23/29 = 0.793 -> 25/30 = 0.833, simulation
 
 Then (gap14) a tilt behind unequal walls is read from both walls' momentum residuals on
 their noise scales (``diagnose._tilt_reading``: the same sign, within ``TILT_AGREE`` = 3
-of each other, z^2 >= 4): ``momentum.common`` is scored against a model-form scale of
+of each other, z^2 >= 4; a wall the fit's simulation has no residual on gets the model's
+own, 0 without a tilt): ``momentum.common`` is scored against a model-form scale of
 0.11 m/s, so a 2-5 deg tilt was worth z^2 0.05-0.1 and unequal walls (or, in multi_ipc
 orbits, a law per wall) absorbed it. Where the best single effect leaves that reading,
 the tilt look also fires on it, and pairs are ranked and kept with the reading added
 (it only ever helps a pair with a tilt). Spent misses 13001 #11 (law -> both), #23 and
-13007 #11 (walls -> both) now named; 13003 #11 not (the walls' model has no right-wall
-residual). Tuning draws 14001-14004 (their 16 asym + tilt cases of ``--drawn 48``): both
-named 12/16 -> 15/16, simulations +0.1 %; 16 compliant unequal walls without a tilt: the
-reading fires on one, no tilt kept. Fresh seeds 14901 and 14902 (``--drawn 24 --no-detect``
-each, run once before and after on the same tree): top-1 29/32 both, none 8/8 both,
-pairs 5/8 -> 6/8 (14901 3/4 -> 4/4; 14902 2/4 both), coverage 53/57 -> 56/60,
-simulations 8282 -> 8285. 14902 misses (both): a multi_ipc asym + tilt named asym, a
-multi_ipc asym + friction named asym + clearance; singles: a no-impact friction and a
--2.5 deg 2ipc_asym tilt called clearance, a 2ipc_sym clearance error called none.
+13007 #11 (walls -> both) now named; 13003 #11 not (its left wall's residual is a
+quarter of the right's). Tuning draws 14001-14004 (their 16 asym + tilt cases of
+``--drawn 48``): both named 12/16 -> 15/16, simulations +0.1 %; 16 compliant unequal
+walls without a tilt: the reading fires on one, no tilt kept. Fresh seeds (``--drawn
+24 --no-detect``, before and after on the same tree), 14901 and 14903 on the final code:
+top-1 29/32 both, none 8/8 both, pairs 7/8 -> 8/8, coverage 60/63 -> 63/66, simulations
+8610 -> 8613. 14902 (run on the first version, then used to tune the missing-residual
+rule): pairs 2/4 both, its multi_ipc asym + tilt now named (124 -> 167 simulations).
+Misses left on these seeds (before and after): singles, a 2ipc_asym speed law named
+asym, a 1 ms contact named inclination, 2ipc_sym clearance errors called none (2), a
+no-impact friction and a -2.5 deg 2ipc_asym tilt called clearance; a multi_ipc asym +
+friction named asym + clearance.
 
 Usage::
 

@@ -268,10 +268,11 @@ def test_unequal_walls_without_a_tilt_get_no_tilt():
 
 
 def _sig(right, left, err=0.0005):
-    from types import SimpleNamespace
+    from vidiscover.gap.components import Signature
 
-    return SimpleNamespace(values={"right.momentum": right, "left.momentum": left},
-                           errors={"right.momentum": err, "left.momentum": err})
+    return Signature(values={"right.momentum": right, "left.momentum": left},
+                     errors={"right.momentum": err, "left.momentum": err},
+                     returnmap=None, impacts={})
 
 
 def _tilt_model(right, left):
@@ -281,24 +282,38 @@ def _tilt_model(right, left):
     return SimpleNamespace(real=real, full=real, rep_var={})
 
 
+def _read_fit(name, gap, n_params, right, left, theta=0.0):
+    from dataclasses import replace
+
+    sig = replace(_sig(right, left), flight_time=0.039)
+    fx = Effects.parse([f"inclination={theta}"]) if theta else Effects()
+    return CandidateFit(name=name, params={}, n_params=n_params, r=0.7, effects=fx,
+                        gap=GapComponents({"s": float(gap)}, {}), signature=sig)
+
+
 def test_the_tilt_reading_is_a_steady_force_on_both_walls():
     from vidiscover.gap.diagnose import _tilt_reading
 
+    def walls(right, left, theta=0.0):
+        return _read_fit("asymmetric_restitution", 1.0, 2, right, left, theta)
+
     # spent draw 13001 #23 (compliant walls and a 2.3 deg tilt): both walls' residuals
     # left by the walls alone, +0.026 / +0.025 m/s, on the floor 0.01 m/s: z^2 ~ 12.9
-    z2, steady = _tilt_reading(_tilt_model(0.0262, 0.0247), _sig(0.0, 0.0))
+    z2, steady = _tilt_reading(_tilt_model(0.0262, 0.0247), walls(0.0, 0.0))
     assert steady and z2 == pytest.approx(12.9, abs=0.1)
     # compliant no-effect walls (calibration draws 7000, 7008): opposite signs, or one
     # wall 3.2 times the other, are no steady force
-    assert not _tilt_reading(_tilt_model(-0.0355, 0.0343), _sig(0.0, 0.0))[1]
-    assert not _tilt_reading(_tilt_model(0.1597, 0.0497), _sig(0.0, 0.0))[1]
-    # a wall without a residual (no free flights beside its impacts): no reading
-    assert _tilt_reading(_tilt_model(0.03, 0.03), _sig(math.nan, 0.0)) == (0.0, False)
-
-
-def _read_fit(name, gap, n_params, right, left):
-    return CandidateFit(name=name, params={}, n_params=n_params, r=0.7, effects=Effects(),
-                        gap=GapComponents({"s": float(gap)}, {}), signature=_sig(right, left))
+    assert not _tilt_reading(_tilt_model(-0.0355, 0.0343), walls(0.0, 0.0))[1]
+    assert not _tilt_reading(_tilt_model(0.1597, 0.0497), walls(0.0, 0.0))[1]
+    # a wall the recording has no residual on: no reading
+    assert _tilt_reading(_tilt_model(math.nan, 0.03), walls(0.0, 0.0)) == (0.0, False)
+    # one the simulation has none on gets the model's own (tuning draw 14902 #11, the
+    # walls' multi_ipc orbit without right-wall residual): 0 without a tilt, ...
+    z2, steady = _tilt_reading(_tilt_model(-0.0275, -0.0133), walls(math.nan, -0.0001))
+    assert steady and z2 == pytest.approx(9.3, abs=0.1)
+    # ... g sin(theta) x the mean flight time with one (-0.0287 m/s at -4.32 deg)
+    z2, _ = _tilt_reading(_tilt_model(-0.0275, -0.0133), walls(math.nan, -0.0136, -4.32))
+    assert z2 == pytest.approx(0.015, abs=0.005)
 
 
 def test_a_steady_force_left_by_the_walls_counts_for_a_pair_with_a_tilt():
@@ -306,7 +321,7 @@ def test_a_steady_force_left_by_the_walls_counts_for_a_pair_with_a_tilt():
 
     model = _tilt_model(0.0262, 0.0247)
     walls = _read_fit("asymmetric_restitution", 5.9, 2, 0.0, 0.0)
-    tilt = _read_fit("asymmetric_restitution+inclination", 2.0, 3, 0.025, 0.025)
+    tilt = _read_fit("asymmetric_restitution+inclination", 2.0, 3, 0.025, 0.025, 2.3)
     # removes 3.9 on the statistics: not kept without the reading (see above) ...
     assert not _keep_pair(walls, tilt, None)
     # ... with it the walls leave 5.9 + 12.9, the pair 2.0 + 0.0
@@ -319,7 +334,7 @@ def test_a_steady_force_left_by_the_walls_counts_for_a_pair_with_a_tilt():
     # pairs are ranked with it (tuning draw 14003 #35: walls + a 0.13 mm clearance error
     # 1.61 against walls + the tilt 2.59)
     clear = _read_fit("asymmetric_restitution+clearance_error", 1.61, 3, 0.0, 0.0)
-    tilt = _read_fit("asymmetric_restitution+inclination", 2.59, 3, 0.024, 0.026)
+    tilt = _read_fit("asymmetric_restitution+inclination", 2.59, 3, 0.024, 0.026, 2.3)
     assert _parsimonious_pair([clear, tilt]) is clear
     assert _parsimonious_pair([clear, tilt], _steady_extra(model, walls)) is tilt
 
@@ -335,7 +350,7 @@ def test_a_tilt_behind_exact_unequal_walls_is_read_from_the_momentum_residuals()
 
     model, walls = _walls_alone(drawn_cases(13007, 24)[11])
     assert walls.gap.total < SIGNIFICANT_DROP
-    read, steady = _tilt_reading(model, walls.signature)
+    read, steady = _tilt_reading(model, walls)
     assert steady and read > 20
     pair, n = _tilt_look(model, walls, _here)
     assert pair is not None and n > 0

@@ -20,6 +20,7 @@ from threadpoolctl import threadpool_limits
 from .._workers import WorkerPool, n_workers
 from ..effects import Effects
 from ..errors import InputError
+from ..params import G_ACCEL
 from .components import (
     GROUPS,
     LASER_STATS,
@@ -852,8 +853,8 @@ _WALL_MOMENTA = ("right.momentum", "left.momentum")
 TILT_AGREE = 3.0
 
 
-def _tilt_reading(model, sig) -> tuple[float, bool]:
-    """Both walls' momentum residuals left by ``sig``, read on their noise scales alone.
+def _tilt_reading(model, fit: CandidateFit) -> tuple[float, bool]:
+    """Both walls' momentum residuals left by ``fit``, read on their noise scales alone.
 
     A steady force along the axis (a tilt) adds g sin(theta) x the flight time to the
     momentum residual at each wall, with the same sign at both (``momentum.common``).
@@ -867,10 +868,17 @@ def _tilt_reading(model, sig) -> tuple[float, bool]:
     no-effect recordings of :mod:`.calibration`: opposite signs in 24 of 32), a tilt
     moves them together.
 
+    A wall where the recording has a residual and the fit's simulation none (no free
+    flights either side of its impacts there: multi_ipc orbits of unequal walls, spent
+    13003 #11, tuning 14002 #47, 14902 #11) is given the model's own: 0 without a tilt
+    (every simulated model without one read |residual| <= 0.0005 m/s on the draws
+    above), g sin(theta) x its mean flight time with one.
+
     Returns
     -------
     z2 : float
-        Sum over the walls of squared residual over noise scale (0 when a wall has none).
+        Sum over the walls of squared residual over noise scale (0 when the recording
+        has none on a wall).
     steady : bool
         Both residuals have the same sign and are within :data:`TILT_AGREE` of each
         other (the larger over the smaller).
@@ -879,8 +887,12 @@ def _tilt_reading(model, sig) -> tuple[float, bool]:
     floor = STATS["momentum.common"][1]
     rep = model.rep_var.get("momentum.common", 0.0)
     z2, ds = 0.0, []
+    sig = fit.signature
+    ft = sig.flight_time if np.isfinite(sig.flight_time) else real.flight_time
+    own = G_ACCEL * math.sin(math.radians(fit.effects.theta_deg)) * ft
     for k in _WALL_MOMENTA:
         a, b = real.values.get(k, math.nan), sig.values.get(k, math.nan)
+        b = b if np.isfinite(b) else own
         if not (np.isfinite(a) and np.isfinite(b)):
             return 0.0, False
         ds.append(a - b)
@@ -897,10 +909,10 @@ def _steady_extra(model, best: CandidateFit):
     function ``fit -> its reading``, added to the gaps of the best and of the pairs
     that compete with it (:func:`_best_pair`, :func:`_keep_pair`); elsewhere None.
     """
-    read, steady = _tilt_reading(model, best.signature)
+    read, steady = _tilt_reading(model, best)
     if not (steady and read >= SIGNIFICANT_DROP):
         return None
-    return lambda fit: _tilt_reading(model, fit.signature)[0]
+    return lambda fit: _tilt_reading(model, fit)[0]
 
 
 def _tilt_look(model, best: CandidateFit, run) -> tuple[CandidateFit | None, int]:
@@ -936,7 +948,7 @@ def _tilt_look(model, best: CandidateFit, run) -> tuple[CandidateFit | None, int
     full = dataclasses.replace(model, real=model.full) if laser else model
     alone = compare(full.real, best.signature, model.rep_var)
     z2 = alone.per_stat.get("momentum.laser_opposite", 0.0) if laser else 0.0
-    read, steady = _tilt_reading(model, best.signature)
+    read, steady = _tilt_reading(model, best)
     if not ((best.name == "asymmetric_restitution" and np.isfinite(z2) and z2 >= TILT_LOOK)
             or (steady and read >= SIGNIFICANT_DROP)):
         return None, 0
@@ -944,7 +956,7 @@ def _tilt_look(model, best: CandidateFit, run) -> tuple[CandidateFit | None, int
     if step is None:
         return None, 0
     pair = _as_pair(best, step, None)
-    keep = (pair.score + _tilt_reading(model, pair.signature)[0]
+    keep = (pair.score + _tilt_reading(model, pair)[0]
             < alone.total + read + PENALTY * best.n_params)
     return (pair if keep else None), step.n_sims
 
