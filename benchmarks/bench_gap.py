@@ -173,7 +173,9 @@ walls without a tilt: the reading fires on one, no tilt kept. Fresh seeds (``--d
 top-1 29/32 both, none 8/8 both, pairs 7/8 -> 8/8, coverage 60/63 -> 63/66, simulations
 8610 -> 8613. 14902 (run on the first version, then used to tune the missing-residual
 rule): pairs 2/4 both, its multi_ipc asym + tilt now named (124 -> 167 simulations).
-Misses left on these seeds (before and after): singles, a 2ipc_asym speed law named
+The quote seeds 13001/13003/13007 (spent, re-run on the same tree): top-1 46/48, none
+12/12 both, pairs 7/12 -> 10/12, coverage 74/82 -> 80/87, simulations +0.5 %.
+Misses left on the fresh seeds (before and after): singles, a 2ipc_asym speed law named
 asym, a 1 ms contact named inclination, 2ipc_sym clearance errors called none (2), a
 no-impact friction and a -2.5 deg 2ipc_asym tilt called clearance; a multi_ipc asym +
 friction named asym + clearance.
