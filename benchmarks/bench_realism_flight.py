@@ -27,7 +27,10 @@ The recordings are simulated again for their truth (the analyses come from the c
 Figures are quoted on the held-back ``holdout6`` split (``test`` and ``holdout`` to
 ``holdout5`` were looked at case by case); ``--split dev`` is for tuning.
 
-Measured (holdout4, 60 cases, fresh analyses, 2026-11-26, run once): identified 1,
+Measured (holdout6, 60 cases, run once, 2026-11-26, at 89bcbab): identified 2, within 1
+(0.017; target 0.9), outside 1 (holdout6-026: theta 0.36 deg for 0.00), bad 0; 1 input
+error (no impacts: a no_impact case). Earlier (holdout5): identified 5, 4 within.
+Earlier (holdout4, fresh analyses): identified 1,
 within, bad 0 (0.017; target 0.9); the 59 others "not identified" (the flights do not
 determine mu or theta, the weak form misfits, or the law moves when the impacts are
 placed where a compliant contact's lines meet). The dev split's first 24 cases

@@ -36,7 +36,11 @@ law so that the impact law is scored on its own:
   target line is the strict share.
 
 Figures are quoted on the ``holdout6`` split (see :mod:`vidiscover.corpus`).
-Measured (holdout4, 60 cases, run once, 2026-11-26): constant-r walls reported
+Measured (holdout6, 60 cases, run once, 2026-11-26, at 89bcbab): constant-r walls reported
+constant 0.942 of 52 (speed laws on 007 L, 033 R, 049 R); Hunt-Crossley walls within
+0.03 at the third clearance 0.883 of 60 (0.962 of the 52 where the prediction is
+identified; true r inside the 95 % band at 0.868 of 3263 impacts). Earlier (holdout5):
+constant 0.983 of 59, HC 0.966 of 58. Earlier (holdout4): constant-r walls reported
 constant 0.970 of 67; Hunt-Crossley walls within 0.03 at the third clearance 0.962 of
 52 (all 46 where the prediction is identified; true r inside the 95 % band at 0.894 of
 2743 predicted impacts). Earlier (holdout3): constant 0.982 of 56, HC 0.909 of 55
