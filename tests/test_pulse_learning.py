@@ -546,3 +546,24 @@ def test_a_steep_family_between_two_coarse_cut_offs_is_refined():
     assert abs(m.cutoff * 5120.0 / 1891.4 - 1.0) < 0.01      # measured 1898 Hz
     assert ie.size == det.n == ok.sum() == 80
 
+
+
+@pytest.mark.slow
+def test_a_learned_response_that_fits_the_pulses_badly_is_reported():
+    """holdout6-040 (Kelvin-Voigt walls, Bessel-3 at 1126 Hz, 2560 Hz, impacts 25-45
+    samples apart; a spent split): its learning windows were bridged over the forced
+    response and a 55 Hz 'filter' learned (misfit 0.217): nothing right was found, and
+    no warning said so. Now the misfit above impacts._MISFIT_WARN (0.15) is reported;
+    dev-000, a sound learned response (misfit ~0.005), carries no such warning."""
+    from vidiscover.corpus import realism_case
+
+    def learned(split, i):
+        rec = realism_case(split, i).simulate().recording
+        return detect_impacts(rec)
+
+    bad = learned("holdout6", 40)
+    assert bad.response.misfit == pytest.approx(0.217, abs=0.01)
+    assert any("fits the strongest pulses poorly (misfit 0.22" in w for w in bad.warnings)
+    good = learned("dev", 0)
+    assert good.response.misfit < 0.02
+    assert not any("fits the strongest pulses poorly" in w for w in good.warnings)
