@@ -84,6 +84,7 @@ from .signals import (
     fill_gaps,
     max5,
     noise_sigma,
+    run_about,
     savgol_smooth,
     smoother_window,
 )
@@ -1099,11 +1100,7 @@ def _secondaries(obj: _Objective, models, shift: np.ndarray, amp: np.ndarray,
         g0 = templ(np.zeros(1))[0]
         p = int(np.argmax(np.abs(g0)))
         main = (np.abs(g0) > _LOBE_SHARE * abs(g0[p])) & (np.sign(g0) == np.sign(g0[p]))
-        a = b = p
-        while a > 0 and main[a - 1]:
-            a -= 1
-        while b < g0.size - 1 and main[b + 1]:
-            b += 1
+        a, b = run_about(main, p)
         lo_lag = float(a + obj.j[0]) - 2.0
         hi_lag = float(b + obj.j[0]) + 2.0
         lags = np.r_[np.arange(-pre + 1.0, lo_lag + 1e-9, fine),

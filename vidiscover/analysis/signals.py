@@ -276,6 +276,25 @@ def max5(v: np.ndarray) -> np.ndarray:
     return np.maximum(m[:-1], p[4:], out=m[:-1])   # i .. i + 4 of p: v[i - 2 .. i + 2]
 
 
+def run_about(mask: np.ndarray, p: int) -> tuple[int, int]:
+    """First and last index of the run of True in ``mask`` about index ``p``.
+
+    The run is followed from ``p`` outwards (``p`` itself is taken whatever
+    ``mask[p]``): e.g. a kernel's main lobe, the contiguous samples about its peak.
+
+    Examples
+    --------
+    >>> run_about(np.array([1, 0, 1, 1, 1, 0, 1], dtype=bool), 3)
+    (2, 4)
+    >>> run_about(np.array([1, 1, 1], dtype=bool), 0)
+    (0, 2)
+    """
+    before = np.flatnonzero(~mask[:p])
+    after = np.flatnonzero(~mask[p + 1:])
+    return (int(before[-1]) + 1 if before.size else 0,
+            p + int(after[0]) if after.size else mask.size - 1)
+
+
 def true_runs(mask: np.ndarray) -> list[tuple[int, int]]:
     """(start, stop) of the runs of True in ``mask``."""
     d = np.diff(np.concatenate([[0], mask.astype(np.int8), [0]]))
