@@ -92,6 +92,7 @@ from .signals import (
     noise_sigma,
     release_freed_memory,
     robust_std,
+    run_about,
     savgol_smooth,
     smoother_window,
     true_runs,
@@ -880,12 +881,7 @@ def _main_lobe(models, fs: float) -> np.ndarray:
         p = int(np.argmax(np.abs(g)))
         main = np.abs(g) >= _LOBE_REL * abs(g[p])
         main &= np.sign(g) == np.sign(g[p])
-        a = p
-        while a > 0 and main[a - 1]:
-            a -= 1
-        b = p
-        while b < j.size - 1 and main[b + 1]:
-            b += 1
+        a, b = run_about(main, p)
         lo, hi = min(lo, int(j[a])), max(hi, int(j[b]))
     out = np.arange(lo, hi + 1)
     out.flags.writeable = False                     # (cached: shared by every call)
