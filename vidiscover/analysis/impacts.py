@@ -1038,7 +1038,7 @@ def _rest_loads(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
                 # found further on, at the search's end, is another misfit, test-056)
                 p_hi = min(float(pos[tail].max()) + 1.0, float(lift[i2]) - 1.0, pos[i2] + h)
                 got = _rest_step(fit, yy, base, bad, load_ratio, sigma, h, i2, lift[i2],
-                                 pos[i2] + 0.5, p_hi, (y, tail))
+                                 pos[i2] + 0.5, p_hi, y)
                 if got is not None:
                     drop.extend(tail.tolist())
                     i, tail_step = i2, True
@@ -1057,13 +1057,14 @@ def _rest_loads(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
 
 def _rest_step(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
                load_ratio: float, sigma: float, h: int, i: int, lift: int,
-               p_lo: float, p_hi: float, tail):
+               p_lo: float, p_hi: float, y_kept: np.ndarray | None):
     """The resting load's step after pulse ``i`` (see :func:`_rest_loads`), or None.
 
     Returns ``((first sample, load values), entry position, entry pulse's amplitude
-    times the model's peak)``. With ``tail = (y without the tail, tail indices)`` the
-    step's fitted amplitude is free within :data:`_TAIL_AMP` of the masses' and it
-    must explain more than the tail's pulses did (the load returned is the masses').
+    times the model's peak)``. With ``y_kept`` (the residual with the tail's weak
+    pulses still taken out; ``y`` has them back in) the step's fitted amplitude is free
+    within :data:`_TAIL_AMP` of the masses' and it must explain more than the tail's
+    pulses did (the load returned is the masses').
     """
     n = fit.n_samples
     pos = fit.pos
@@ -1108,7 +1109,7 @@ def _rest_step(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
     u /= np.maximum(np.sqrt(np.einsum("gw,gw->g", u, u)), 1e-300)[:, None]
     r0 = y0[None, :] - u * (u @ y0)[:, None]
     T = T0 - u * np.einsum("gw,gw->g", u, T0)[:, None]
-    if tail is None:
+    if y_kept is None:
         scale = np.ones(grid.size)
         R = r0 - T
     else:
@@ -1121,10 +1122,9 @@ def _rest_step(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
     Tb = scale[b] * T[b]
     if not (gain > _REST_DCHI2 * sigma ** 2 and gain > _REST_SHARE * float(Tb @ Tb)):
         return None
-    if tail is not None:
+    if y_kept is not None:
         # the step and its entry pulse against the tail's pulses (each over the cubic
         # and the last pulse's correction)
-        y_kept, _ = tail
         yk = y_kept[k][w]
         rk = yk - Q @ (Q.T @ yk)
         own = float(y0 @ y0 - rk @ rk)
