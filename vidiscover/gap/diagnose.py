@@ -448,7 +448,14 @@ def _significant(nominal: CandidateFit, fits: list[CandidateFit]) -> bool:
         return True
     if not fits:
         return False
-    g1 = fits[0].gap.total
+    return _drops(g0, fits[0].gap.total)
+
+
+def _drops(g0: float, g1: float) -> bool:
+    """A significant drop of a gap: ``g0`` to ``g1``.
+
+    By :data:`SIGNIFICANT_DROP` at least, leaving at most :data:`SIGNIFICANT_REST` of it.
+    """
     return bool(g0 - g1 >= SIGNIFICANT_DROP and g1 <= SIGNIFICANT_REST * g0)
 
 
@@ -833,8 +840,7 @@ def _keep_pair(best: CandidateFit, pair: CandidateFit | None, real, model=None) 
         return bool(removed > SECOND_EFFECT_SHARE * (g + extra_best - NULL_GAP)
                     and removed > PENALTY)
     if best.n_params < 3 and g >= SIGNIFICANT_DROP:
-        g0, g1 = g + extra_best, pair.gap.total + extra_pair
-        return bool(g0 - g1 >= SIGNIFICANT_DROP and g1 <= SIGNIFICANT_REST * g0)
+        return _drops(g + extra_best, pair.gap.total + extra_pair)
     margin = PENALTY if _law_spread(best, real) >= LAW_SPREAD else 0.0
     return bool(removed > margin)
 
