@@ -881,7 +881,7 @@ class _CompliantLoop(_Loop):
                          full_output=True, mxstep=100000, h0=0.25 * (grid[1] - grid[0]))
         if info["message"] != "Integration successful.":
             raise SimulationError(f"compliant engine: odeint failed at t = {grid[0]:.9g} s: "
-                               f"{info['message']}")
+                                  f"{info['message']}")
         return Y
 
     def _ivp_contact(self, t0, X0, side, band: float | None = None):
