@@ -678,6 +678,9 @@ def _unique_rows(X: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return perm[mask], inv
 
 
+_BRIDGE_SIDE = 4    # good samples a learning window's bridge needs on each side
+
+
 def _strong_pulses(af: np.ndarray, bad: np.ndarray, fs: float, n_pulses: int,
                    min_snr: float, isolation: int, smooth_ms: float, pre: int, post: int):
     """Strong isolated transients and their windows (smooth part removed).
@@ -743,7 +746,7 @@ def _strong_pulses(af: np.ndarray, bad: np.ndarray, fs: float, n_pulses: int,
     mask = bad.copy()
     for i in peaks:
         mask[i - pre:i + post + 1] = True
-    base = savgol_smooth(bridge_gaps(af, mask), win)
+    base = savgol_smooth(bridge_gaps(af, mask, min_side=_BRIDGE_SIDE), win)
     jj = peaks[:, None] + np.arange(-pre, post + 1)[None, :]
     Y = af[jj] - base[jj]
     # the sign of the pulse: the side of its largest excursion
