@@ -267,3 +267,28 @@ def test_penetration_is_each_flights_largest_excursion(monkeypatch, part):
         seen.append(got)
     seen = np.concatenate(seen)
     assert 0.2 < (seen > 0).mean() < 0.8          # both kinds of flights were checked
+
+
+@pytest.mark.parametrize("kept", [0.4, 1.0])
+def test_the_drift_is_read_at_block_centres_when_the_laser_has_gaps(kept):
+    """A laser on its rails 60 % of the time (other-rig regime case 111 of seed 14001:
+    the unknown initial velocity puts a 2.4 m/s slope on the drift). A block of the
+    drift smoother partly on a rail has its mean at its kept samples' mean time, up to
+    half a block (3 ms) from its centre: read at the centre, the smoothed drift was off
+    by 4.6 mm and its derivative by 61 mm/s here (a quadratic drift, noise-free laser).
+    Carried along the slope: 16 um (linear fills across the 15 ms rails of a curved
+    drift) and 0.28 mm/s. Without gaps, the centres as they are: 4.5 um (linear
+    between the centres)."""
+    from vidiscover.analysis.reconstruction import _drift
+
+    fs = 2560.0
+    tr = np.arange(int(1.8 * fs)) / fs
+    drift = 1.8e-3 + 2.4 * tr - 0.35 * tr ** 2
+    x = 0.0175 * np.sin(2 * np.pi * 22.1 * tr)              # the LO, clipped at 10 mm
+    ok = (np.abs(x) < 0.01) if kept < 1 else np.ones(tr.size, dtype=bool)
+    assert abs(ok.mean() - kept) < 0.05
+    xl = np.where(ok, x + drift, np.nan)
+    D, Dd = _drift(tr, xl, x, ok, fs, 0.1)(tr)
+    assert np.abs(D - drift).max() < (3e-5 if kept < 1 else 6e-6)    # 16 / 4.5 um
+    inner = slice(100, -100)                 # (Dd is held beyond the end block centres)
+    assert np.abs(Dd - (2.4 - 0.7 * tr))[inner].max() < 5e-4          # 0.28 mm/s
