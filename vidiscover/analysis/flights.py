@@ -110,7 +110,8 @@ class FlightData:
         For diagnosis: e.g. the true jumps, or the equivalent instantaneous impacts of
         compliant contacts, in place of the analysed ones, to tell the analysis's
         errors from the flight-law estimator's. The flights' start and end times
-        follow ``t``; the LO motion is kept.
+        follow ``t``; the LO motion is kept. Impacts placed by ``t`` are instantaneous
+        there (their contact durations become 0).
 
         Parameters
         ----------
@@ -135,17 +136,25 @@ class FlightData:
         # instantaneous impacts at the given points
         out.exit_t, out.exit_y = out.ts, out.y_imp[self.i_s]
         out.exit_v = out.v_plus[self.i_s]
+        if t is not None:
+            out.tau = np.zeros_like(self.tau)
         return out
 
-    def equivalent_impacts(self) -> FlightData:
+    def equivalent_impacts(self, scale: float = 1.0) -> FlightData:
         """A copy with every impact at the equivalent impact of its contact.
 
         A compliant contact of duration ``tau`` is not an impact at its entry: the
-        approach and rebound lines of the relative position meet ``dt = tau / (1 + r)``
-        after the entry, ``dz = |u-| r tau / (1 + r)`` beyond the wall (r = -u+/u-,
-        ``tau`` the learned pulse's contact duration of that wall). The flights
+        approach and rebound lines of the relative position meet ``dt = r tau / (1 + r)``
+        after the entry (``u- dt = u+ (dt - tau)``), ``dz = |u-| dt`` beyond the wall
+        (r = -u+/u-, ``tau`` the learned pulse's contact duration of that wall). The flights
         between those points are what the weak form's straight-line mean velocities
         describe; for an instantaneous impact (tau = 0) nothing moves.
+
+        Parameters
+        ----------
+        scale : float
+            Factor on the learned contact durations (1: as learned; e.g. 0.6 to see
+            how the flights move if the learned durations are 40 % too long).
 
         Returns
         -------
@@ -154,9 +163,12 @@ class FlightData:
         with np.errstate(divide="ignore", invalid="ignore"):
             r = -self.u_plus / self.u_minus
         r = np.where(np.isfinite(r), np.clip(r, 0.0, 1.0), 1.0)
-        tau = np.where(np.isfinite(self.tau), self.tau, 0.0)
-        dt = tau / (1.0 + r)
-        dz = np.nan_to_num(np.abs(self.u_minus)) * r * dt
+        if not (math.isfinite(scale) and scale >= 0):
+            raise InputError(f"equivalent_impacts: scale must be a finite factor >= 0, was "
+                             f"{scale!r}")
+        tau = np.where(np.isfinite(self.tau), self.tau, 0.0) * scale
+        dt = r * tau / (1.0 + r)
+        dz = np.nan_to_num(np.abs(self.u_minus)) * dt
         return self.with_impacts(t=self.t_imp + dt,
                                  y=self.y_imp + np.nan_to_num(self.v_minus) * dt
                                  + self.sign * dz)

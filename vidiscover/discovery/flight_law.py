@@ -63,13 +63,15 @@ on the final library integrals. Percentiles of mu and theta over the resamples
 each term is reported as its inclusion probability.
 
 **Contact geometry.** A compliant contact is not an impact at its entry: its
-equivalent instantaneous impact lies ``tau / (1 + r)`` later and ``|u-| r tau / (1 + r)``
-beyond the wall, about 0.5-1 % of a flight's length for the corpus's walls, as much as
-friction's share of the jumps. The analysis gives the contact entry; the (constant,
-friction) fixed point is recomputed at the equivalent impacts of the learned contact
-durations, and when that moves mu by more than :data:`MAX_MU_SE` or theta by more than
-:data:`MAX_THETA_SE` the law is not identified (the learned durations are too uncertain
-to take that law instead).
+equivalent instantaneous impact (where the straight approach and rebound lines of z
+meet) lies ``r tau / (1 + r)`` later and ``|u-| r tau / (1 + r)`` beyond the wall, about
+0.5-1 % of a flight's length for the corpus's walls, as much as friction's share of the
+jumps. The analysis gives the contact entry; when the learned pulses have a duration,
+the tents are built between the equivalent impacts of the learned contact durations
+(:meth:`FlightData.equivalent_impacts`). Those durations are not exact (Hunt-Crossley
+walls' are learned 27-65 % too long, once 3.6 times): the (constant, friction) fixed
+point is recomputed with them :data:`_TAU_SCALE` times as long, and when that moves mu by more than
+:data:`MAX_MU_SE` or theta by more than :data:`MAX_THETA_SE` the law is not identified.
 
 **Admissibility.** Candidate laws with mu < 0 are not considered (the selection is
 constrained to mu >= 0): where the free fit lands slightly below zero, the law
@@ -146,6 +148,11 @@ _MU_NEGLIGIBLE = 0.005       # a free fit this little below mu = 0 is mu = 0
 _MAX_DISTRACTORS = 1        # terms besides constant and friction in one candidate
 #: Starting laws (mu, theta_deg) of the reconstruction fixed point.
 _STARTS = ((0.0, 0.0), (0.3, 2.0), (0.3, -2.0))
+#: Factor on the learned contact durations of the placement test: Hunt-Crossley walls'
+#: durations are learned 27-65 % too long (holdout6-006/-010; one 3.6 times, -006 at
+#: 0.67 b), Kelvin-Voigt ones within 7 % (-001/-009); the law must hold with them 0.3
+#: times as long.
+_TAU_SCALE = 0.3
 _AMBIGUOUS = (0.02, 0.2)    # fixed points further apart than this (mu, deg) are rivals
 _COLLINEAR = 0.99           # cosine above which mu and theta are confounded
 _TOL_MU, _TOL_THETA = 5e-4, 5e-3   # fixed point reached (mu, deg)
@@ -691,17 +698,23 @@ def _wall_scale_test(X: np.ndarray, Y: np.ndarray, scale_cols: np.ndarray, floor
             abs(free[1] - tied[1]))
 
 
-def _geometry_shift(records, library, law, jc, jf, max_iter):
-    """How the (constant, friction) fixed point moves at the equivalent impacts.
+def _compliant(records) -> bool:
+    """Whether any learned contact of ``records`` has a duration (a compliant wall)."""
+    return any(np.any(np.nan_to_num(rec.tau) > 0) for rec in records)
 
-    ``records`` with every impact moved to the equivalent instantaneous impact of its
-    contact (:meth:`FlightData.equivalent_impacts`, from the learned contact duration);
-    the fixed point is started from ``law`` (mu, theta). Returns ``(d mu, d theta deg)``,
-    or None when no contact has a duration (instantaneous impacts: nothing moves).
+
+def _geometry_shift(records, library, law, jc, jf, max_iter, scale: float = _TAU_SCALE):
+    """How the (constant, friction) fixed point moves with the learned contact durations.
+
+    ``records`` (the analysed contact entries) with every impact moved to the equivalent
+    instantaneous impact of its contact (:meth:`FlightData.equivalent_impacts`) with the
+    learned contact durations times ``scale``; the fixed point is started from ``law``
+    (mu, theta, fitted at the durations as learned). Returns ``(d mu, d theta deg)``, or
+    None when no contact has a duration (instantaneous impacts: nothing moves).
     """
-    if not any(np.any(np.nan_to_num(rec.tau) > 0) for rec in records):
+    if not _compliant(records):
         return None
-    moved = _Tents([rec.equivalent_impacts() for rec in records], library)
+    moved = _Tents([rec.equivalent_impacts(scale) for rec in records], library)
     if moved.n < len(library) + 5:
         return None
     mu, theta, _, _ = _fixed_point(moved, jc, jf, law, max_iter)
@@ -820,7 +833,10 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
         raise InputError(f"max_iter must be an integer >= 1, was {max_iter!r}")
     if not (isinstance(max_tilt_deg, (int, float)) and 0 < max_tilt_deg < 90):
         raise InputError(f"max_tilt_deg must be in (0, 90) degrees, was {max_tilt_deg!r}")
-    records = [a if isinstance(a, FlightData) else FlightData.of(a) for a in analyses]
+    entries = [a if isinstance(a, FlightData) else FlightData.of(a) for a in analyses]
+    # compliant contacts: the tents between the equivalent instantaneous impacts
+    records = ([rec.equivalent_impacts() for rec in entries] if _compliant(entries)
+               else entries)
     tents = _Tents(records, library)
     if tents.n < len(library) + 5:
         raise InputError(f"only {tents.n} usable impacts (tents) for {len(library)} "
@@ -927,15 +943,14 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
             f"the pulse areas of the walls disagree in scale: with one free scale per wall "
             f"the fit moves by {dmu:.2g} in mu and {dth:.2g} deg in theta (significant: "
             f"chi2 {hausman:.3g} > {_HAUSMAN:g})")
-    shift = _geometry_shift(records, library, (best[0], best[1]), jc, jf, max_iter)
+    shift = _geometry_shift(entries, library, (best[0], best[1]), jc, jf, max_iter)
     if shift is not None and (abs(shift[0]) > MAX_MU_SE or abs(shift[1]) > MAX_THETA_SE):
-        taus = sorted({round(float(t) * 1e6) for rec in records for t in np.unique(rec.tau)})
+        taus = sorted({round(float(t) * 1e6) for rec in entries for t in np.unique(rec.tau)})
         reasons.append(
-            f"the law depends on where in the contact the impact is placed: at the "
-            f"equivalent impacts of the learned contacts ({'/'.join(map(str, taus))} us) "
-            f"instead of the contact entries it moves by {shift[0]:+.2g} in mu and "
-            f"{shift[1]:+.2g} deg in theta (compliant walls; the analysis does not place "
-            "the impacts that precisely)")
+            f"the law depends on where in the contact the impact is placed: with the "
+            f"learned contact durations ({'/'.join(map(str, taus))} us) {1 - _TAU_SCALE:.0%} "
+            f"shorter it moves by {shift[0]:+.2g} in mu and {shift[1]:+.2g} deg in theta "
+            "(compliant walls; the analysis does not place the impacts that precisely)")
     mu_free = _mu_theta((_CONSTANT, _FRICTION), unconstrained)[0]
     if _CONSTRAINED and _negative_friction(mu_free, mu_se):
         reasons.append(f"the fit wants a negative friction, mu = {mu_free:.3g} (beyond twice "
