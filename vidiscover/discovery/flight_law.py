@@ -700,7 +700,7 @@ def _wall_scale_test(X: np.ndarray, Y: np.ndarray, scale_cols: np.ndarray, floor
 
 def _compliant(records) -> bool:
     """Whether any learned contact of ``records`` has a duration (a compliant wall)."""
-    return any(np.any(np.nan_to_num(rec.tau) > 0) for rec in records)
+    return any(np.any(np.nan_to_num(rec.centroid) > 0) for rec in records)
 
 
 def _geometry_shift(records, library, law, jc, jf, max_iter, scale: float = _TAU_SCALE):
