@@ -251,7 +251,7 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None,
     rm = return_map(det.t, det.side, forcing.period)
     ctx = FeatureContext(t=det.t, side=det.side, dv=det.dv, t_start=float(rec.t[0]),
                          t_end=float(rec.t[-1]) + 1.0 / det.sample_rate, forcing=forcing,
-                         ts=recon.t, x=recon.x, returnmap=rm)
+                         ts=recon.t, x=recon.x_impacts, returnmap=rm)
     features = compute_features(ctx, features)
     warnings = list(det.warnings)
     if forcing.source != "xe":

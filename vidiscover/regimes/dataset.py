@@ -287,7 +287,7 @@ def feature_context(analysis):
     return FeatureContext(t=det.t, side=det.side, dv=det.dv, t_start=float(det.t0),
                           t_end=float(det.t0) + det.n_samples / det.sample_rate,
                           forcing=analysis.forcing, ts=analysis.reconstruction.t,
-                          x=analysis.reconstruction.x, returnmap=analysis.returnmap)
+                          x=analysis.reconstruction.x_impacts, returnmap=analysis.returnmap)
 
 
 def simulate_case(case: Case) -> dict:
