@@ -141,6 +141,13 @@ _CONSTANT = "1"
 _MAX_ITER = 8
 _N_THRESHOLDS = 12
 _MAX_MISFIT = 0.01          # largest RMS residual / RMS ball velocity jump
+#: Largest misfit the jumps' precision can excuse. The precision (area - fitted area) is
+#: inflated behind steep filters (holdout6-006: 12.8 % for true jump errors of 0.8-3 %),
+#: and a misfit of 2 % is half friction's share of the jumps (mu g T / jump ~ 4 % at
+#: mu 0.15): test-023 (39 of 239 weak left-wall impacts missed in chatter) misfit 4.4 %,
+#: precision 4.6 %, was identified at mu 0.010 for 0.153. The laws identified within
+#: tolerance on dev/test/holdout6 misfit 0.6-1.4 %.
+_MAX_MISFIT_EXCUSED = 0.02
 _CONSTRAINED = True         # candidate laws with mu < 0 are not considered
 _SCALE_TEST = False         # True: refuse laws that move with a free pulse-area scale per wall
 _HAUSMAN = 9.21             # chi2(2) at 99 %
@@ -216,7 +223,7 @@ class FlightLawResult:
         recording cannot tell friction from inclination; pool clearances).
     misfit : float
         RMS residual over RMS ball velocity jump ``(m1/m2) |dv|`` of the tents.
-        Above ``max(1 %, precision)`` the weak form does not hold (e.g. unseen
+        Above ``max(1 %, min(precision, 2 %))`` the weak form does not hold (e.g. unseen
         re-impacts when the ball chatters on a weak wall).
     precision : float
         Relative precision of the jumps, measured in the recordings: RMS of the
@@ -785,7 +792,7 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
     -------
     FlightLawResult
         ``identified`` False, with a one-line ``reason`` and no numbers as results,
-        when the weak form misfits (> 1 % of the ball velocity jumps), friction and
+        when the weak form misfits (> max(1 %, min(precision, 2 %)) of the jumps), friction and
         inclination are confounded (collinear columns, or rival fixed points that
         close the tents about as well), or the fit is inadmissible (the free fit's mu more than two
         standard errors below 0, |theta| > ``max_tilt_deg``); the selection itself
@@ -902,7 +909,7 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
     diagnostic = {"mu": mu, "theta_deg": theta, "terms": kept, "coefficients": kc,
                   "equation": equation, "mu_ci": mu_ci, "theta_ci": theta_ci}
     reasons = []
-    if misfit > max(_MAX_MISFIT, precision):
+    if misfit > max(_MAX_MISFIT, min(precision, _MAX_MISFIT_EXCUSED)):
         reasons.append(f"the weak form does not hold: the fit misses the tents by "
                        f"{misfit:.1%} of the ball velocity jumps (their precision here: "
                        f"{precision:.1%}; unseen re-impacts in wall chatter, the ball riding "
