@@ -1008,7 +1008,7 @@ def test_slow_clusters_reading_off_do_not_make_a_compliant_constant_wall_a_law(c
     assert law.kind == "constant", law.formula
 
 
-_FALSE_LAWS = Path(__file__).parent / "data" / "impact_law" / "realism_holdout6_false_laws"
+_FALSE_LAWS = Path(__file__).parent / "data" / "impact_law" / "realism_holdout_false_laws"
 
 
 def _false_law_case(case: str, side: str):
@@ -1023,19 +1023,23 @@ def _false_law_case(case: str, side: str):
     return law, float(d["r_true"].iloc[0])
 
 
-@pytest.mark.parametrize(("case", "side", "n_bad"), [("holdout6-007", "left", 18),
-                                                     ("holdout6-049", "right", 7)])
-def test_two_clusters_leaving_equally_fast_are_no_speed_law(case, side, n_bad):
-    """Kelvin-Voigt walls (spent holdout6; every true impact at one speed) whose r
-    estimates form two speed clusters 6 % and 12 % apart that leave the wall at the
-    same speed (0.562/0.563 and 0.776/0.775 m/s): the faster cluster's incoming speed
-    is wrong, and a law through both fell steeply (``1 - 0.504 v^0.5``, ``1 - 0.244
-    v^2``). The smaller cluster is excluded as inconsistent, the constant reported,
-    within 0.005 of the true r (measured 0.0049 and 0.0020)."""
+@pytest.mark.parametrize(("case", "side", "n_bad", "tol"), [("holdout6-007", "left", 18, 0.0055),
+                                                            ("holdout6-049", "right", 7, 0.0055),
+                                                            ("holdout5-043", "right", 9, 0.11)])
+def test_two_clusters_leaving_equally_fast_are_no_speed_law(case, side, n_bad, tol):
+    """Kelvin-Voigt walls (spent holdouts; every true impact at one speed) whose r
+    estimates form two speed clusters 6-14 % apart that leave the wall at the same
+    speed (0.562/0.563, 0.776/0.775, 1.98/1.98 m/s): one cluster's incoming speed is
+    wrong, and a law through both fell steeply (``1 - 0.504 v^0.5``, ``1 - 0.244 v^2``,
+    ``1 - 0.030 v^2``). The smaller cluster is excluded as inconsistent and the
+    constant reported: within 0.005 of the true r where the smaller cluster was the
+    wrong one (measured 0.0049 and 0.0020); in holdout5-043 it was the right one
+    (0.105 off), which the warning says may happen."""
     law, r_true = _false_law_case(case, side)
     assert law.kind == "constant", law.formula
     assert law.n_inconsistent == n_bad and "leave as fast as" in law.warning
-    assert abs(law.coefficients["1"] - r_true) < 0.0055
+    assert "r is known only between the two" in law.warning
+    assert abs(law.coefficients["1"] - r_true) < tol
 
 
 def test_a_law_far_worse_than_the_constant_is_not_the_admissible_fallback():
