@@ -63,14 +63,16 @@ on the final library integrals. Percentiles of mu and theta over the resamples
 each term is reported as its inclusion probability.
 
 **Contact geometry.** A compliant contact is not an impact at its entry: its
-equivalent instantaneous impact (where the straight approach and rebound lines of z
-meet) lies ``r tau / (1 + r)`` later and ``|u-| r tau / (1 + r)`` beyond the wall, about
-0.5-1 % of a flight's length for the corpus's walls, as much as friction's share of the
-jumps. The analysis gives the contact entry; when the learned pulses have a duration,
-the tents are built between the equivalent impacts of the learned contact durations
-(:meth:`FlightData.equivalent_impacts`). Those durations are not exact (Hunt-Crossley
-walls' are learned 27-65 % too long, once 3.6 times): the (constant, friction) fixed
-point is recomputed with them :data:`_TAU_SCALE` times as long, and when that moves mu by more than
+equivalent instantaneous impact (where the ball's approach and rebound lines meet)
+lies at the centroid of the contact force, ``r tau / (1 + r)`` after the entry for a
+contact that ends on the wall, about 0.5-1 % of a flight's length for the corpus's
+walls, as much as friction's share of the jumps. The analysis gives the contact
+entry; when the learned pulses have a duration, the tents are built between the
+equivalent impacts at the learned force's centroid
+(:meth:`FlightData.equivalent_impacts`, :func:`~vidiscover.analysis.flights.force_centroids`).
+The learned durations are not exact (Hunt-Crossley walls' are learned 27-65 % too
+long, once 3.6 times): the (constant, friction) fixed point is recomputed with them
+:data:`_TAU_SCALE` times as long, and when that moves mu by more than
 :data:`MAX_MU_SE` or theta by more than :data:`MAX_THETA_SE` the law is not identified.
 
 **Admissibility.** Candidate laws with mu < 0 are not considered (the selection is
@@ -82,12 +84,12 @@ identified (mu >= 0 does not close the tents).
 **Pulse-area scale per wall.** The pulse areas' errors behind causal filters and
 compliant walls are mostly a scale per wall, repeated at every impact, which the
 standard errors do not cover. The (constant, friction) fit is redone with one free
-scale of the jumps per wall; when that moves mu by more than :data:`MAX_MU_SE` or
-theta by more than :data:`MAX_THETA_SE`, significantly (Hausman chi2 with 2 degrees
-of freedom above its 99 % point), the result carries a warning; a significant move of
-mu itself makes the law not identified (test-054: 0.034 in mu, 0.147 for 0.183). (Refusing such laws
-removed every wrong law of the realism benchmark but also the independent
-simulator's pooled law, which is within tolerance: a warning for now.)
+scale of the jumps per wall. When that moves mu by more than :data:`MAX_MU_SE`,
+significantly (Hausman chi2 with 2 degrees of freedom above its 99 % point), the law
+is not identified (test-054: mu 0.147 for 0.183, moved by 0.034); a significant move
+of theta alone by more than :data:`MAX_THETA_SE` only carries a warning (refusing
+those too removed the independent simulator's pooled law, which is within
+tolerance).
 
 Examples
 --------
