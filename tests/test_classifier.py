@@ -463,15 +463,16 @@ def test_probe_rows_leave_out_rows_that_move_under_a_one_ulp_nudge(monkeypatch):
 
 
 #: The issue's targets are 0.95 and every recall >= 0.9, every label (none exempt).
-#: Not met on this set: ``classify`` measures 0.9455 (369 cases) and ``1ipc`` 11 of 16
-#: (0.688): grazing one-impact-per-cycle rigs whose impacts the detector does not see or
-#: sees in part of the cycles. The floors guard what is achieved (a regression fails);
-#: the misses are reported in the README and the notes. Every other label measures
-#: >= 0.969. Shipped model of bd7e41a (retrained after the stop's pulse-learning
-#: changes and the periodic-partial-impact label rule of 5b33ca0); the model before
-#: read 0.935 (``1ipc`` 10 of 16) here.
-RECALL_FLOOR = {lab: 0.9 for lab in LABELS} | {"1ipc": 0.68}
-BALANCED_FLOOR = 0.94
+#: Measured on this set with the shipped model of 8fdbcdd (retrained after this stop's
+#: reconstruction fix for clipped lasers, x_impacts and detection changes): ``classify``
+#: 0.9612 (369 cases), every label >= 0.978 but ``1ipc``, 12 of 16 (0.75): grazing
+#: one-impact-per-cycle rigs whose impacts the detector cannot see (seed 16001's misses
+#: touch the wall at 0.5-0.7 mm/s, LO velocity jumps of 2-3.5e-6 m/s, pulses about a
+#: third of the noise). The floors guard what is achieved (a regression fails); the
+#: ``1ipc`` miss is reported in the README and the notes. The model before read 0.9455
+#: (``1ipc`` 11 of 16) here.
+RECALL_FLOOR = {lab: 0.9 for lab in LABELS} | {"1ipc": 0.74}
+BALANCED_FLOOR = 0.95
 
 
 @pytest.mark.slow
