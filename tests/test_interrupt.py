@@ -30,17 +30,28 @@ def _write_recordings(folder, n, seconds):
 
 @pytest.mark.slow
 def test_sigint_at_any_point_of_a_multi_file_analyze_leaves_nothing(tmp_path):
-    # large files: the CSV read takes a while; 12 of them, so that the whole command
-    # (4.2-5.1 s for 8 once the analysis got faster) outlasts the last delay
+    # large files: the CSV read takes a while. The delays are shares of one
+    # uninterrupted run's wall time: fixed delays (up to 4.5 s) outlasted the command
+    # twice as the analysis got faster (8 files: 4.2-5.1 s; then 12 files: 4 of 6
+    # interrupts landed after the learning got faster again)
     _write_recordings(tmp_path, 12, 60.0)
     files = sorted(p.name for p in tmp_path.glob("r*.csv"))
-    interrupted = 0
-    for k, delay in enumerate((0.3, 1.2, 2.0, 2.8, 3.6, 4.5)):
-        out = f"out{k}"
-        proc = subprocess.Popen([sys.executable, "-m", "vidiscover.cli", "analyze", *files,
+
+    def command(out):
+        return subprocess.Popen([sys.executable, "-m", "vidiscover.cli", "analyze", *files,
                                  "--out", out, "--no-figures"], cwd=tmp_path,
                                 stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-        time.sleep(delay)
+
+    start = time.monotonic()
+    full = command("out_full")
+    _, err = full.communicate(timeout=300)
+    whole = time.monotonic() - start
+    assert full.returncode == 0, err
+    interrupted = 0
+    for k, share in enumerate((0.07, 0.2, 0.35, 0.5, 0.65, 0.8)):
+        out = f"out{k}"
+        proc = command(out)
+        time.sleep(share * whole)
         sent = time.monotonic()
         proc.send_signal(signal.SIGINT)
         _, err = proc.communicate(timeout=60)
@@ -48,11 +59,11 @@ def test_sigint_at_any_point_of_a_multi_file_analyze_leaves_nothing(tmp_path):
         if proc.returncode == 0:               # finished before the signal
             continue
         interrupted += 1
-        assert proc.returncode == 130, (delay, err)
-        assert stopped < 5.0, (delay, stopped)
-        assert not (tmp_path / out).exists(), delay
+        assert proc.returncode == 130, (share, err)
+        assert stopped < 5.0, (share, stopped)
+        assert not (tmp_path / out).exists(), share
         leftovers = [p.name for p in tmp_path.iterdir() if p.name.startswith(".")]
-        assert leftovers == [], (delay, leftovers)
+        assert leftovers == [], (share, leftovers)
     assert interrupted >= 5
 
 
