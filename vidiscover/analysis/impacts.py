@@ -112,6 +112,7 @@ _GRID_STEP = 0.05          # sub-sample delay grid of the fit (samples)
 _GRID_HALF = 1.5           # the grid spans +/- this many samples around the peak
 _FIRST_ROUND_REL = 0.35    # first round: a peak must reach this share of the local max
 _MAX_CLIP_RUN = 4          # longer clipped runs are a saturated smooth response, not a pulse
+_CENTRE = np.arange(-2, 3)  # samples about a pulse's centre that must be read (reliable)
 #: A learned pulse response whose misfit (RMS residual of the learning pulses over the
 #: model's peak) exceeds this is reported as unreliable. The realism corpus's dev and
 #: test splits (196 learned responses) read 0.0008-0.034 (99 % below 0.034; the largest,
@@ -1024,6 +1025,7 @@ def _rest_loads(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
                 cand.append((i, prev, j[:e + 1][grp[:e + 1] == grp[e]]))
     h = win // 2
     out, entries, drop = [], [], []
+    scratch = None          # y with a tail's weak pulses put back (one copy, restored)
     for i, prev, run in cand:
         gap = pos[i] - pos[prev]
         p_hi = min(pos[i] + max(_REST_GAPS * gap, 3.0), float(lift[i]) - 1.0, pos[i] + h)
@@ -1034,24 +1036,29 @@ def _rest_loads(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
             # a late load taken for weak pulses: the step searched from the stronger
             # pulse before them, with them taken out
             a = np.abs(amp[run])
-            q = run.size - 2
-            while q > 0 and not a[q + 1:].max() < _TAIL_REL * a[q]:
-                q -= 1
-            if q > 0 and a[q + 1:].max() < _TAIL_REL * a[q]:
+            # the shortest tail all below _TAIL_REL of the pulse before it
+            q = next((q for q in range(run.size - 2, 0, -1)
+                      if a[q + 1:].max() < _TAIL_REL * a[q]), 0)
+            if q > 0:
                 tail = run[q + 1:]
                 i2 = run[q]
-                yy = y.copy()
+                if scratch is None:
+                    scratch = y.copy()
                 rows = fit.render(with_pulses=True)[1]
                 cc = np.rint(pos[tail]).astype(np.int64)
+                touched = []
                 for t, ct in zip(tail, cc):
                     kk = ct + fit.jw
                     ok = (kk >= 0) & (kk < n)
-                    yy[kk[ok]] += rows[t][ok]
+                    scratch[kk[ok]] += rows[t][ok]
+                    touched.append(kk[ok])
                 # (the entry no later than the weak pulses it would replace: a step
                 # found further on, at the search's end, is another misfit, test-056)
                 p_hi = min(float(pos[tail].max()) + 1.0, float(lift[i2]) - 1.0, pos[i2] + h)
-                got = _rest_step(fit, yy, base, bad, load_ratio, sigma, h, i2, lift[i2],
+                got = _rest_step(fit, scratch, base, bad, load_ratio, sigma, h, i2, lift[i2],
                                  pos[i2] + 0.5, p_hi, y)
+                for kk in touched:
+                    scratch[kk] = y[kk]
                 if got is not None:
                     drop.extend(tail.tolist())
                     i, tail_step = i2, True
@@ -1908,7 +1915,7 @@ class _Fitter:
         win = c[:, None] + self.jl[None, :]
         # clipped on its own main lobe (a weak pulse's fit window may reach the rail
         # samples of the stronger one before it)
-        own = _take(clip, c[:, None] + np.arange(-2, 3)[None, :], False).any(axis=1)
+        own = _take(clip, c[:, None] + _CENTRE[None, :], False).any(axis=1)
         if not own.any():
             return 0
         merged = self._misfit(_take(resid, win, 0.0), sigma, model_error)
@@ -1958,7 +1965,7 @@ class _Fitter:
         ksum = self.kernel_rows(self.jw, d, self.amp, self.wid).sum(axis=1) / fs
         area = self.amp * ksum + _take(resid, c[:, None] + self.jw[None, :], 0.0).sum(axis=1) / fs
         win = c[:, None] + self.jl[None, :]
-        main = c[:, None] + np.arange(-2, 3)[None, :]
+        main = c[:, None] + _CENTRE[None, :]
         bad = clip | nan
         return {
             "t": t0 + self.pos / fs - self.side_value(delays) - self.pulse_value(self.v_shift),
