@@ -208,7 +208,7 @@ def _line(name: str, s: dict) -> str:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout7", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout8", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--json", action="store_true")

@@ -47,7 +47,7 @@ move theta by 0.2-1.6 deg (dev-000/002/007): the jumps, not the estimator, limit
 
 Usage::
 
-    python benchmarks/bench_realism_flight.py [--split holdout7] [--n 60] [--start 0]
+    python benchmarks/bench_realism_flight.py [--split holdout8] [--n 60] [--start 0]
         [--cache DIR] [--oracle]
 """
 
@@ -164,7 +164,7 @@ def score_case(case, cache: str | None = None, oracle: bool = False) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout7", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout8", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--cache", default=None,

@@ -60,7 +60,7 @@ the sensors or the analysis change.
 
 Usage::
 
-    python benchmarks/bench_realism_impact_law.py [--split holdout7] [--n 60] [--n-boot 200]
+    python benchmarks/bench_realism_impact_law.py [--split holdout8] [--n 60] [--n-boot 200]
         [--cache DIR]
 """
 
@@ -222,7 +222,7 @@ def band_half_width(law, v: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.n
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout7", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout8", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--n-boot", type=int, default=200,
