@@ -17,6 +17,7 @@ from vidiscover.regimes.classifier import (
     TRUSTED_TYPES,
     RegimeClassifier,
     RuleBaseline,
+    choose_rule_gate,
     choose_rule_labels,
     evaluate,
     fit_model,
@@ -290,7 +291,10 @@ def test_small_set_trains_and_scores(small_sets, small_model):
 
 
 def test_model_file_round_trip(small_sets, small_model, tmp_path):
+    from dataclasses import replace
+
     _, test = small_sets
+    small_model = replace(small_model, rule_min_proba={"chaotic": 0.2})
     path = save_model(small_model, tmp_path / "m.skops")
     back = load_model(path)
     np.testing.assert_array_equal(back.predict_proba(test), small_model.predict_proba(test))
@@ -298,6 +302,7 @@ def test_model_file_round_trip(small_sets, small_model, tmp_path):
     assert back.metadata == {"seed": 5} and back.rule_inputs == small_model.rule_inputs
     assert back.rule_labels == small_model.rule_labels
     assert back.rule_proba == small_model.rule_proba
+    assert back.rule_min_proba == {"chaotic": 0.2}
     import skops.io as sio
     assert set(sio.get_untrusted_types(file=path)) <= set(TRUSTED_TYPES)
 
@@ -334,6 +339,46 @@ def test_the_rules_keep_the_labels_where_they_beat_the_classifier():
     clf[:6] = "1ipc"
     assert choose_rule_labels(y, clf, rules) == ("chaotic",)
     assert choose_rule_labels(y, clf, rules, min_cases=3) == ("smr", "chaotic")
+
+
+def test_the_rules_stand_unless_the_classifier_is_confident_of_another_label():
+    """A paper-rig record with one impact in 35 cycles is no_impact by the labels'
+    contract (ipc < 0.05) and by the rules; the classifier may call it 1ipc or chaotic
+    (paper 18001 #273: 1ipc, p(no_impact) 0.49). On other rigs the same rule reads a
+    record whose impacts the detection missed (truth multi_ipc; the classifier sure of
+    it). All-or-nothing, the rules lose no_impact on the other rigs (right in half);
+    from a probability of 0.02 on they win it on both."""
+    y = np.array(["no_impact"] * 10 + ["multi_ipc"] * 6 + ["no_impact"] * 6)
+    groups = np.array(["paper_rig"] * 10 + ["other_rigs"] * 12)
+    rules = np.array(["no_impact"] * 22)
+    clf = np.array(["chaotic"] * 3 + ["no_impact"] * 7 + ["multi_ipc"] * 6
+                   + ["no_impact"] * 6)
+    p = np.r_[[0.3] * 3, [0.9] * 7, [0.01] * 6, [0.9] * 6]
+    proba = pd.DataFrame({lab: np.zeros(22) for lab in LABELS}).assign(no_impact=p)
+    assert choose_rule_labels(y, clf, rules, groups=groups) == ()
+    assert choose_rule_gate(y, clf, rules, proba, groups=groups) == {"no_impact": 0.02}
+    # where the classifier is right anyway, a threshold gains nothing: not kept
+    clf[:3] = "no_impact"
+    assert choose_rule_gate(y, clf, rules, proba, groups=groups) == {}
+
+
+def test_classify_keeps_a_rule_label_from_its_least_probability(small_sets, small_model):
+    from dataclasses import replace
+
+    _, test = small_sets
+    gated = replace(small_model, rule_labels=tuple(LABELS),
+                    rule_min_proba={lab: 0.5 for lab in LABELS})
+    labels, methods = gated.decide(test)
+    rules = RuleBaseline().predict(test[[f"feature:{n}" for n in RuleBaseline.FEATURES]]
+                                   .rename(columns=lambda c: c.split(":", 1)[1]))
+    proba = gated.predict_proba(test)
+    least = np.array([proba.loc[i, r] for i, r in enumerate(rules)]) >= 0.5
+    np.testing.assert_array_equal(methods == "rules", least)
+    assert (labels[least] == rules[least]).all()
+    assert (labels[~least] == gated.predict(test)[~least]).all()
+    # no threshold: the rules whenever they name one of the rule labels
+    labels, methods = replace(gated, rule_min_proba={}).decide(test)
+    assert (methods == "rules").all() and (labels == rules).all()
 
 
 def test_features_are_the_same_for_a_rig_at_another_scale():
@@ -387,9 +432,17 @@ def test_rule_baseline_applies_the_design_rules():
             # periodic, impacts in 2 of 3 cycles that repeat: multi_ipc, not chaotic
             {**base, "impacting_cycle_share": 0.67, "impact_period_error": 0.001},
             {**base, "impacting_cycle_share": 0.67, "impact_period_error": 0.05}]
+    # a weak detection after some impacts (other rig 18001 #24: compliant walls, 3.7
+    # detections per cycle, strong ones 2 per cycle alternating and repeating, truth
+    # 2ipc_sym): the strong impacts decide, when they repeat
+    weak = {**base, "impacts_per_cycle": 3.7, "two_per_cycle_share": 0.18,
+            "alternation": 0.53, "asymmetry": 0.001, "strong_two_share": 1.0,
+            "strong_alternation": 1.0, "impact_period_error": 1e-5}
+    rows += [weak, {**weak, "asymmetry": 0.3}, {**weak, "impact_period_error": 0.05},
+             {**weak, "strong_alternation": 0.5}]
     assert list(RuleBaseline().predict(pd.DataFrame(rows))) == [
         "2ipc_asym", "2ipc_sym", "no_impact", "smr", "chaotic", "chaotic", "multi_ipc",
-        "1ipc", "multi_ipc", "chaotic"]
+        "1ipc", "multi_ipc", "chaotic", "2ipc_sym", "2ipc_asym", "multi_ipc", "multi_ipc"]
 
 
 # --------------------------------------------------------------------------- shipped model
