@@ -351,15 +351,17 @@ def test_the_rules_stand_unless_the_classifier_is_confident_of_another_label():
     y = np.array(["no_impact"] * 10 + ["multi_ipc"] * 6 + ["no_impact"] * 6)
     groups = np.array(["paper_rig"] * 10 + ["other_rigs"] * 12)
     rules = np.array(["no_impact"] * 22)
-    clf = np.array(["chaotic"] * 3 + ["no_impact"] * 7 + ["multi_ipc"] * 6
+    clf = np.array(["chaotic"] * 5 + ["no_impact"] * 5 + ["multi_ipc"] * 6
                    + ["no_impact"] * 6)
-    p = np.r_[[0.3] * 3, [0.9] * 7, [0.01] * 6, [0.9] * 6]
+    p = np.r_[[0.3] * 5, [0.9] * 5, [0.01] * 6, [0.9] * 6]
     proba = pd.DataFrame({lab: np.zeros(22) for lab in LABELS}).assign(no_impact=p)
     assert choose_rule_labels(y, clf, rules, groups=groups) == ()
     assert choose_rule_gate(y, clf, rules, proba, groups=groups) == {"no_impact": 0.02}
-    # where the classifier is right anyway, a threshold gains nothing: not kept
-    clf[:3] = "no_impact"
+    # a threshold needs min_cases recordings the rules win: 4 are too few
+    clf[0] = "no_impact"
     assert choose_rule_gate(y, clf, rules, proba, groups=groups) == {}
+    assert choose_rule_gate(y, clf, rules, proba, groups=groups, min_cases=4) == {
+        "no_impact": 0.02}
 
 
 def test_classify_keeps_a_rule_label_from_its_least_probability(small_sets, small_model):
@@ -440,9 +442,16 @@ def test_rule_baseline_applies_the_design_rules():
             "strong_alternation": 1.0, "impact_period_error": 1e-5}
     rows += [weak, {**weak, "asymmetry": 0.3}, {**weak, "impact_period_error": 0.05},
              {**weak, "strong_alternation": 0.5}]
+    # periodicity is the labels' test on the state (x and x'): x repeating within 1 %
+    # and x' not is chaotic (other rig 18003 #159: 0.0044 in x, 0.0146 in the state,
+    # truth chaotic); without the state's error, x alone
+    rows += [{**base, "strobe_period_error": 0.0044, "strobe_state_error": 0.0146},
+             {**base, "strobe_period_error": 0.0044, "strobe_state_error": 0.005},
+             {**base, "strobe_period_error": 0.0044, "strobe_state_error": math.nan}]
     assert list(RuleBaseline().predict(pd.DataFrame(rows))) == [
         "2ipc_asym", "2ipc_sym", "no_impact", "smr", "chaotic", "chaotic", "multi_ipc",
-        "1ipc", "multi_ipc", "chaotic", "2ipc_sym", "2ipc_asym", "multi_ipc", "multi_ipc"]
+        "1ipc", "multi_ipc", "chaotic", "2ipc_sym", "2ipc_asym", "multi_ipc", "multi_ipc",
+        "chaotic", "2ipc_asym", "2ipc_asym"]
 
 
 # --------------------------------------------------------------------------- shipped model

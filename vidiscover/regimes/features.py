@@ -495,8 +495,8 @@ REGIME_FEATURES = FeatureSet({
     "envelope_cv": _env_cv,
 })
 
-#: ``strobe_state_error`` (the labels' periodicity test on x and x'), a set of its own
-#: (the rule baseline reads x alone, ``strobe_period_error``) and part of
+#: ``strobe_state_error`` (the labels' periodicity test on x and x', which the rule
+#: baseline reads too; ``strobe_period_error`` is x alone), a set of its own and part of
 #: :data:`ALL_FEATURES`: other rigs' chaotic motions often repeat within 1 % in x
 #: and not in x', and a model that reads x alone calls them ``multi_ipc`` (with the
 #: end-of-record fix and ``--n-corpus-train 192``, other rigs' ``chaotic`` recall on
