@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 from scipy import signal
 
 from vidiscover import Metadata, Recording
@@ -56,3 +57,36 @@ def test_a_late_resting_load_on_a_soft_wall_is_not_an_impact():
     ie, _ = match_impacts(det.t, t_in, 0.5e-3)
     assert ie.size == t_in.size == 60
     assert det.n - ie.size == 0                               # was 20
+
+
+@pytest.mark.parametrize("seed, was", [(5, 5), (6, 10)])
+def test_a_late_load_rising_through_the_wall_is_not_an_impact(seed, was):
+    # the load sets in 6 samples after the slow entry and rises with the wall's
+    # overshoot (a Kelvin-Voigt wall of damping ratio 0.45): the instantaneous step did
+    # not explain its front, left as weak pulses (5 and 10 of 20 periods). The step is
+    # now also tried as the step response of the wall's oscillator (its learned contact
+    # duration lasts over 2 samples): one extra left in each
+    rec, t_in = _late_load(6.0, seed=seed)
+    det = detect_impacts(rec)
+    ie, _ = match_impacts(det.t, t_in, 0.5e-3)
+    assert ie.size == t_in.size == 60
+    assert det.n - ie.size <= 1 < was
+
+
+@pytest.mark.slow
+def test_a_chatter_run_ending_in_a_rest_on_a_soft_wall_counts_its_impacts():
+    # holdout7-000 (spent): Kelvin-Voigt walls; each period's right chatter run ends in a
+    # slow entry (0.07 m/s) and an 18 ms rest, whose load comes back about 1 ms later
+    # with an overshoot at 0.17-0.23 of the entry's pulse; that lobe was counted in 17
+    # of 37 periods (217 detections for 200 impacts). Now 203: within 3 %, none missed
+    from vidiscover.analysis import analyze
+    from vidiscover.analysis.validation import match_impacts_by_wall
+    from vidiscover.corpus import realism_case
+
+    case = realism_case("holdout7", 0)
+    sim = case.simulate()
+    det = analyze(sim.recording, flight_law=(case.mu, case.theta), n_boot=0).detection
+    imp = sim.truth.impacts
+    ie, _ = match_impacts_by_wall(det.t, det.side, imp.t_in, imp.side)
+    assert imp.t_in.size == len(ie) == 200
+    assert det.n - 200 <= 3                                   # was 17
