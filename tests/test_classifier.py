@@ -334,11 +334,15 @@ def test_the_rules_keep_the_labels_where_they_beat_the_classifier():
     rules = np.array(["1ipc"] * 5 + ["multi_ipc"] + ["1ipc"] + ["chaotic"] * 5 + ["smr"] * 3)
     clf = np.array(["1ipc"] * 4 + ["chaotic"] * 2 + ["chaotic"] * 6 + ["smr"] * 3)
     # rules say 1ipc 6 times, right 5 (clf right 4 of those); rules say chaotic 5
-    # times, right 5 (clf too: a tie goes to the rules); smr: only 3 cases
-    assert choose_rule_labels(y, clf, rules) == ("1ipc", "chaotic")
+    # times, right 5 (clf too), but chaotic is the rules' default (no rule held),
+    # never kept; smr: only 3 cases
+    assert choose_rule_labels(y, clf, rules) == ("1ipc",)
     clf[:6] = "1ipc"
-    assert choose_rule_labels(y, clf, rules) == ("chaotic",)
-    assert choose_rule_labels(y, clf, rules, min_cases=3) == ("smr", "chaotic")
+    assert choose_rule_labels(y, clf, rules) == ()
+    assert choose_rule_labels(y, clf, rules, min_cases=3) == ("smr",)
+    # a tie goes to the rules: smr right 3 of 3, the classifier too
+    clf[-3:] = "smr"
+    assert choose_rule_labels(y, clf, rules, min_cases=3) == ("smr",)
 
 
 def test_the_rules_stand_unless_the_classifier_is_confident_of_another_label():
