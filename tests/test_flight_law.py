@@ -419,3 +419,65 @@ def test_a_law_that_moves_with_the_contact_geometry_is_not_identified():
     res = discover_flight_law(recs, n_boot=0)
     assert res.identified, res.reason
     assert abs(res.mu - 0.1) < MU_TOL and abs(res.theta_deg - 1.0) < THETA_TOL
+
+
+def test_gain_basis_takes_out_a_gain_per_recording_and_wall():
+    """The rows' transform (:meth:`_Tents.basis`): free gains, an orthonormal basis of the
+    complement of the jumps per recording and wall (one row less each); a finite spread,
+    the random-effects weighting ``T'T = (I + N N' sd^2 / s^2)^-1``; none, the identity."""
+    from vidiscover.analysis.flights import FlightData
+    from vidiscover.discovery.flight_law import _Tents
+
+    recs = [FlightData.of(_case(b, 0.0, 0.0)[0]) for b in CLEARANCES[:2]]
+    free = _Tents(recs, DEFAULT_LIBRARY, gain_sd=math.inf)
+    N = free.gain_columns()
+    assert N.shape == (free.n_rows, 4)                 # 2 recordings x 2 walls
+    T = free.basis()
+    assert free.n == free.n_rows - 4 == T.shape[0]
+    np.testing.assert_allclose(T @ N, 0.0, atol=1e-12 * np.abs(N).max())
+    np.testing.assert_allclose(T @ T.T, np.eye(free.n), atol=1e-10)
+    sd = 0.004
+    some = _Tents(recs, DEFAULT_LIBRARY, gain_sd=sd)
+    s2 = (some.precision() * np.sqrt(np.mean(some.jumps() ** 2))) ** 2
+    W = np.linalg.inv(np.eye(some.n_rows) + N @ N.T * sd ** 2 / s2)
+    np.testing.assert_allclose(some.basis().T @ some.basis(), W, atol=1e-10)
+    assert some.n == some.n_rows
+    none = _Tents(recs, DEFAULT_LIBRARY, gain_sd=0.0)
+    assert none.n == none.n_rows
+    # a gain put into the residuals comes back (free) or shrunk towards 0 (finite sd)
+    g = np.array([0.004, -0.002, 0.006, 0.001])
+    np.testing.assert_allclose(free.gains(N @ g), g, rtol=1e-9)
+    assert np.all(np.abs(some.gains(N @ g)) < np.abs(g))
+
+
+def test_free_jump_gains_refuse_a_wall_whose_areas_are_far_off():
+    """One recording's right-wall jumps 6 % too large (far beyond the pulse-area gains of
+    +0.03..+0.6 % the corpus shows): with the gains free the law is not identified, and
+    the reason says which gain it would take; a bad spread is an input error."""
+    recs = [_exact_jumps(*_case(b, 0.1, 1.0)) for b in CLEARANCES]
+    fd = recs[1]
+    g = np.where(fd.sign > 0, 0.06, 0.0)
+    recs[1] = fd.with_impacts(dv=fd.dv * (1 + g), area=fd.area * (1 + g))
+    res = discover_flight_law(recs, n_boot=0, jump_gain_sd=math.inf)
+    _assert_no_numbers(res)
+    assert "pulse areas of one recording at one wall would be +" in res.reason
+    gains = res.diagnostic["jump_gains"]
+    assert len(gains) == 6 and abs(gains[2] - 0.06) < 0.02, gains
+    with pytest.raises(InputError, match="jump_gain_sd"):
+        discover_flight_law(recs, n_boot=0, jump_gain_sd=-1.0)
+
+
+def test_a_kept_distractor_has_the_standard_errors_of_its_own_support():
+    """A distractor nearly collinear with sgn(z') (as z' is over a flight's speeds): the
+    friction coefficient of the law that keeps it is far less certain than in the
+    (constant, friction) fit, and that is the standard error the law carries."""
+    from vidiscover.discovery.flight_law import _standard_errors, _support_errors
+
+    X, rng = _rows(7, 200)
+    extra = X[:, 1] * rng.uniform(0.9, 1.1, X.shape[0])
+    Theta = np.column_stack([X, extra])
+    Y = X @ np.array([0.17, -0.98]) + rng.normal(0, 1e-4, X.shape[0])
+    base = _standard_errors(X, Y, 1e-4)
+    sup = _support_errors(Theta, Y, [0, 1, 2], 0, 1, 1e-4)
+    assert sup[0] > 5 * base[0] and sup[1] >= 0.0
+    assert _support_errors(Theta, Y, [0, 1], 0, 1, 1e-4) == (0.0, 0.0)
