@@ -143,7 +143,13 @@ def main(argv=None) -> int:
         ap.error(f"--seed {args.seed} is a training or held-out seed of the model; "
                  "pick another")
     out: dict = {"model": args.model or "shipped default", "seed": args.seed,
-                 "rule_labels": list(model.rule_labels), "targets": TARGETS, "sets": {}}
+                 "rule_labels": list(model.rule_labels),
+                 "rule_min_proba": dict(model.rule_min_proba), "targets": TARGETS, "sets": {}}
+    if not args.json:
+        gate = ", ".join(f"{lab}" + (f" (classifier p >= {model.rule_min_proba[lab]:.2f})"
+                                     if model.rule_min_proba.get(lab, 0) > 0 else "")
+                         for lab in model.rule_labels) or "none"
+        print(f"classify takes the rules' label for: {gate}\n")
     for name in [s for s in args.sets.split(",") if s]:
         t0 = time.perf_counter()
         key = args.corpus_split if name == "corpus_test" else f"{args.seed}-{args.n}"
