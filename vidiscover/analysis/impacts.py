@@ -1205,15 +1205,13 @@ def _wall_rise(zeta: float, tau: float, size: int) -> np.ndarray:
 
 
 def _rise_rows(G: np.ndarray, ds: np.ndarray) -> np.ndarray:
-    """Rows of filtered unit steps ``G`` (along axis 1) turned into a rise of increments ``ds``."""
-    out = np.zeros_like(G)
-    m_max = min(ds.size, G.shape[1])
-    for m in range(m_max):
-        if m == 0:
-            out += ds[0] * G
-        else:
-            out[:, m:] += ds[m] * G[:, :-m]
-    return out
+    """Rows of filtered unit steps ``G`` (along axis 1) turned into a rise of increments ``ds``.
+
+    Each row convolved with ``ds`` from its first sample on (a FIR filter from rest).
+    """
+    from scipy.signal import lfilter
+
+    return lfilter(ds, [1.0], G, axis=1)
 
 
 #: Pulses further apart than this (s) are not judged by :meth:`_Fitter.drop_infeasible`:
