@@ -444,6 +444,10 @@ def test_gain_basis_takes_out_a_gain_per_recording_and_wall():
     assert some.n == some.n_rows
     none = _Tents(recs, DEFAULT_LIBRARY, gain_sd=0.0)
     assert none.n == none.n_rows
+    shared = _Tents(recs, DEFAULT_LIBRARY, gain_sd=math.inf, gain_per="recording")
+    Ns = shared.gain_columns()
+    np.testing.assert_array_equal(Ns, np.column_stack([N[:, 0] + N[:, 1], N[:, 2] + N[:, 3]]))
+    assert shared.n == shared.n_rows - 2
     # a gain put into the residuals comes back (free) or shrunk towards 0 (finite sd)
     g = np.array([0.004, -0.002, 0.006, 0.001])
     np.testing.assert_allclose(free.gains(N @ g), g, rtol=1e-9)
@@ -465,6 +469,8 @@ def test_free_jump_gains_refuse_a_wall_whose_areas_are_far_off():
     assert len(gains) == 6 and abs(gains[2] - 0.06) < 0.02, gains
     with pytest.raises(InputError, match="jump_gain_sd"):
         discover_flight_law(recs, n_boot=0, jump_gain_sd=-1.0)
+    with pytest.raises(InputError, match="jump_gain_per"):
+        discover_flight_law(recs, n_boot=0, jump_gain_per="impact")
 
 
 def test_a_kept_distractor_has_the_standard_errors_of_its_own_support():
@@ -481,3 +487,23 @@ def test_a_kept_distractor_has_the_standard_errors_of_its_own_support():
     sup = _support_errors(Theta, Y, [0, 1, 2], 0, 1, 1e-4)
     assert sup[0] > 5 * base[0] and sup[1] >= 0.0
     assert _support_errors(Theta, Y, [0, 1], 0, 1, 1e-4) == (0.0, 0.0)
+
+
+def test_a_free_gain_per_recording_takes_out_a_common_scale_of_its_pulse_areas():
+    """Each recording's jumps 0.4 / 0.6 / 0.3 % too large (the corpus's pulse areas carry
+    such gains, nearly equal at both walls): taken as they are, the law keeps the
+    distractor z'^3 and friction 0.092; with one free gain per recording it is the law
+    (mu 0.1000, theta 1.001 deg) and the gains come back to 0.01 %."""
+    gains = (0.004, 0.006, 0.003)
+    recs = []
+    for b, g in zip(CLEARANCES, gains, strict=True):
+        fd = _exact_jumps(*_case(b, 0.1, 1.0))
+        recs.append(fd.with_impacts(dv=fd.dv * (1 + g), area=fd.area * (1 + g)))
+    tied = discover_flight_law(recs, n_boot=0)
+    assert not (tied.identified and set(tied.terms) == {"1", "sgn(z')"}
+                and abs(tied.mu - 0.1) < 0.005), tied.equation
+    res = discover_flight_law(recs, n_boot=0, jump_gain_sd=math.inf,
+                              jump_gain_per="recording")
+    _check(res, 0.1, 1.0)
+    assert abs(res.mu - 0.1) < 0.002 and abs(res.theta_deg - 1.0) < 0.02
+    np.testing.assert_allclose(res.diagnostic["jump_gains"], gains, atol=1e-4)
