@@ -24,10 +24,12 @@ contacts (``+ equivalent impacts``: where the straight approach and rebound line
 z meet, ``t* = (u- t_in - u+ t_out) / (u- - u+)``, beyond the wall by ``u- (t* - t_in)``).
 The recordings are simulated again for their truth (the analyses come from the cache).
 
-Figures are quoted on the held-back ``holdout7`` split (``test`` and ``holdout`` to
-``holdout6`` were looked at case by case); ``--split dev`` is for tuning.
+Figures are quoted on the held-back ``holdout8`` split (``test`` and ``holdout`` to
+``holdout7`` were looked at case by case); ``--split dev`` is for tuning.
 
-Measured (holdout7, 60 cases, run once, 2026-11-26, at 8fdbcdd): identified 3, all within
+Measured (holdout8, 60 cases, run once, 2026-11-27, at e634b4a): identified 7, all within
+(0.117; target 0.9: 003, 010, 014, 030, 052, 058, 059), outside 0, bad 0, no input error.
+Earlier (holdout7, at 8fdbcdd): identified 3, all within
 (0.050; target 0.9), outside 0, bad 0; 1 input error (holdout7-037: no impact read, the
 accelerometer saturated over 71 % of the record). Earlier (holdout6, at 89bcbab):
 identified 2, within 1

@@ -35,8 +35,11 @@ law so that the impact law is scored on its own:
   at 1.4 times the speed is honest; one whose band is narrow and wrong is not. The
   target line is the strict share.
 
-Figures are quoted on the ``holdout7`` split (see :mod:`vidiscover.corpus`).
-Measured (holdout7, 60 cases, run once, 2026-11-26, at 8fdbcdd): constant-r walls reported
+Figures are quoted on the ``holdout8`` split (see :mod:`vidiscover.corpus`).
+Measured (holdout8, 60 cases, run once, 2026-11-27, at e634b4a): constant-r walls reported
+constant 1.000 of 54; Hunt-Crossley walls within 0.03 at the third clearance 1.000 of 60
+(11 of them pooled speeds spanning less than 1.15 x; true r inside the 95 % band at 0.915
+of 3288 impacts). Earlier (holdout7, at 8fdbcdd): constant-r walls reported
 constant 0.984 of 62; Hunt-Crossley walls within 0.03 at the third clearance 0.963 of 54
 (1.000 of the 51 where the prediction is identified; the two misses pooled speeds
 spanning less than 1.15 x; true r inside the 95 % band at 0.955 of 2919 impacts).
