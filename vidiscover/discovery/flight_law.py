@@ -773,22 +773,34 @@ def _fixed_point(tents, jc, jf, start, max_iter):
     return mu, theta, rss, k + 1
 
 
+def _ols_variances(X: np.ndarray, Y: np.ndarray, floor: float):
+    """(coefficients, their variances) of the least-squares fit ``Y ~ X``, or None.
+
+    The residual scale is the fit's own or ``floor``, whichever is larger; None when
+    the fit has no residual degree of freedom or ``X`` is singular.
+    """
+    n, k = X.shape
+    if n <= k:
+        return None
+    coef = np.linalg.lstsq(X, Y, rcond=None)[0]
+    s2 = max(float(np.sum((Y - X @ coef) ** 2)) / (n - k), floor ** 2)
+    try:
+        return coef, s2 * np.diag(np.linalg.inv(X.T @ X))
+    except np.linalg.LinAlgError:
+        return None
+
+
 def _standard_errors(X: np.ndarray, Y: np.ndarray, floor: float) -> tuple[float, float]:
     """Standard errors of mu and theta (deg) of the (constant, friction) fit ``X``.
 
     The residual scale is the fit's own or ``floor`` (the jumps' precision, m/s),
     whichever is larger: systematic errors of the pulse areas do not average out.
     """
-    n, k = X.shape
-    if n <= k:
+    fit = _ols_variances(X, Y, floor)
+    if fit is None:
         return math.inf, math.inf
-    coef = np.linalg.lstsq(X, Y, rcond=None)[0]
-    s2 = max(float(np.sum((Y - X @ coef) ** 2)) / (n - k), floor ** 2)
-    try:
-        cov = s2 * np.linalg.inv(X.T @ X)
-    except np.linalg.LinAlgError:
-        return math.inf, math.inf
-    se_c, se_f = np.sqrt(np.clip(np.diag(cov), 0.0, None))
+    coef, var = fit
+    se_c, se_f = np.sqrt(np.clip(var, 0.0, None))
     s = float(np.clip(coef[0] / G_ACCEL, -0.99, 0.99))
     return float(se_f / G_ACCEL), float(np.degrees(se_c / G_ACCEL / math.sqrt(1 - s * s)))
 
@@ -805,16 +817,10 @@ def _support_errors(Theta: np.ndarray, Y: np.ndarray, support: Sequence[int], jc
     support = list(support)
     if not set(support) - {jc, jf} or not {jc, jf} & set(support):
         return 0.0, 0.0
-    X = Theta[:, support]
-    n, k = X.shape
-    if n <= k:
+    fit = _ols_variances(Theta[:, support], Y, floor)
+    if fit is None:
         return math.inf, math.inf
-    coef = np.linalg.lstsq(X, Y, rcond=None)[0]
-    s2 = max(float(np.sum((Y - X @ coef) ** 2)) / (n - k), floor ** 2)
-    try:
-        var = s2 * np.diag(np.linalg.inv(X.T @ X))
-    except np.linalg.LinAlgError:
-        return math.inf, math.inf
+    coef, var = fit
     se = dict(zip(support, np.sqrt(np.clip(var, 0.0, None)), strict=True))
     mu_se = float(se[jf] / G_ACCEL) if jf in se else 0.0
     s = float(np.clip(coef[support.index(jc)] / G_ACCEL, -0.99, 0.99)) if jc in se else 0.0
