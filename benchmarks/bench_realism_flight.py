@@ -20,8 +20,11 @@ Scores (targets of the issue):
 ``--oracle`` separates the analysis's errors from the estimator's: each case is also
 fitted with the TRUE ball velocity jumps in place of the pulse areas (``truth jumps``),
 and with the true jumps at the equivalent instantaneous impacts of the compliant
-contacts (``+ equivalent impacts``: where the straight approach and rebound lines of
-z meet, ``t* = (u- t_in - u+ t_out) / (u- - u+)``, beyond the wall by ``u- (t* - t_in)``).
+contacts (``+ equivalent impacts``: where the straight approach line of z, from the
+wall at the entry, and the rebound line, from where the ball leaves the contact
+``z_out = z(t_out)``, meet: ``t* = (z_out - z_wall + u- t_in - u+ t_out) / (u- - u+)``,
+beyond the wall by ``u- (t* - t_in)``; a Kelvin-Voigt wall releases the ball with its
+spring still compressed, so ``z_out`` is inside it).
 The recordings are simulated again for their truth (the analyses come from the cache).
 
 Figures are quoted on the held-back ``holdout8`` split (``test`` and ``holdout`` to
@@ -114,10 +117,17 @@ def oracle_flights(case, outs) -> tuple[list, list]:
         dv = np.where(ok, -ball[jj] / fd.ratio, fd.dv)
         jumps.append(fd.with_impacts(dv=dv, area=dv))
         um, up = np.asarray(ti.u_minus, float)[jj], np.asarray(ti.u_plus, float)[jj]
-        den = np.where(um != up, um - up, 1.0)
-        t_eq = np.where(um != up, (um * t_in[jj] - up * t_out[jj]) / den, t_in[jj])
         side = np.where(np.asarray(ti.side)[jj] == "right", 1.0, -1.0)
-        z_eq = side * sim.truth.b_true + um * (t_eq - t_in[jj])
+        wall = side * sim.truth.b_true
+        # the rebound line starts where the ball leaves the contact, z(t_out): inside the
+        # wall on a Kelvin-Voigt wall (its force reaches 0 with the spring still
+        # compressed, 0.04-0.2 mm on the corpus), at it on a Hunt-Crossley or rigid one
+        z_out = (np.asarray(sim.result.evaluate(t_out[jj] + sim.truth.settle)["z"], float)
+                 if t_in.size else np.zeros(0))
+        den = np.where(um != up, um - up, 1.0)
+        t_eq = np.where(um != up,
+                        (z_out - wall + um * t_in[jj] - up * t_out[jj]) / den, t_in[jj])
+        z_eq = wall + um * (t_eq - t_in[jj])
         x_eq = np.asarray(sim.result.evaluate(t_eq + sim.truth.settle)["x"], float)
         eq = ok & np.isfinite(x_eq + z_eq) & np.isfinite(t_eq)
         equivalent.append(fd.with_impacts(t=np.where(eq, t_eq, fd.t_imp),
