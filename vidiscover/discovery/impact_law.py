@@ -227,7 +227,16 @@ _N_THRESHOLDS = 8
 _CANCELLATION = 10.0
 #: alpha v of the Hunt-Crossley fits is tabulated on [0, 50] (interpolation error < 2e-6)
 _HC_GRID = np.linspace(0.0, 50.0, 20001)
-_HC_TABLE: list[np.ndarray] = []
+
+
+@functools.cache
+def _hc_table() -> np.ndarray:
+    """:func:`hunt_crossley_restitution` on :data:`_HC_GRID` (computed once, read-only)."""
+    tab = hunt_crossley_restitution(_HC_GRID)
+    tab.setflags(write=False)
+    return tab
+
+
 _EFFECT_GRID = np.linspace(0.01, 0.99, 50)   # quantiles of the observed speeds
 #: A law claims the speeds from rest to this many times the fastest observed impact
 #: (the upper end of its band, :meth:`ImpactLawResult.band_table`). Its r must stay
@@ -322,9 +331,7 @@ class _Design:
     @staticmethod
     def _hc(x: np.ndarray) -> np.ndarray:
         """:func:`hunt_crossley_restitution` interpolated from a table (fits call it often)."""
-        if not _HC_TABLE:
-            _HC_TABLE.append(hunt_crossley_restitution(_HC_GRID))
-        return np.interp(x, _HC_GRID, _HC_TABLE[0])
+        return np.interp(x, _HC_GRID, _hc_table())
 
     def predict(self, cand: _Candidate, coef: np.ndarray, v: np.ndarray) -> np.ndarray:
         """Restitution of ``cand`` with ``coef`` (of ``cand.r_terms``) at speeds ``v``."""
@@ -804,9 +811,7 @@ def _hc_elasticity(r: float) -> float:
     0.3): the outgoing speed of the one contact law of the catalogue whose r falls
     without bound rises more slowly the more it dissipates. The constant r has 1.
     """
-    if not _HC_TABLE:
-        _HC_TABLE.append(hunt_crossley_restitution(_HC_GRID))
-    tab = _HC_TABLE[0]
+    tab = _hc_table()
     k = int(np.searchsorted(-tab, -r))          # r_HC falls along the grid
     k = min(max(k, 1), _HC_GRID.size - 2)
     x0, x1, r0, r1 = _HC_GRID[k - 1], _HC_GRID[k + 1], tab[k - 1], tab[k + 1]
