@@ -395,22 +395,20 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
         raise InputError(f"{rec.name}: column 'a' has no finite value; "
                          "the acceleration is needed to find impacts")
     clip = clipped_mask(a, a_range)
-    flat = None
+    flat = np.zeros(a.size, dtype=bool)
     if clip.any():
         clip, flat = _without_smooth_extrema(a, clip, nan, fs, baseline_ms, threshold,
                                              a_range)
     # (the pulse learner still leaves out the runs at the rail that only their flat
     # neighbours cleared: its choice of windows keeps its results there)
-    learn_bad = nan | clip if flat is not None and flat.any() else None
-    if learn_bad is not None:
-        clip = clip & ~flat
+    learn_bad = nan | clip
+    clip = clip & ~flat
     bad = nan | clip
     af = fill_gaps(a, bad)
     warnings: list[str] = []
     response = pulse if isinstance(pulse, PulseResponse) else None
     if pulse is None:
-        response = learn_pulse(af, fs, bad if learn_bad is None else learn_bad,
-                               smooth_ms=baseline_ms)
+        response = learn_pulse(af, fs, learn_bad, smooth_ms=baseline_ms)
         if response is None and clip.any():
             response = _learn_through_clips(a, clip, nan, fs, baseline_ms)
             if response is not None:
@@ -727,7 +725,7 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
 
 def _without_smooth_extrema(a: np.ndarray, clip: np.ndarray, nan: np.ndarray, fs: float,
                             baseline_ms: float, threshold: float,
-                            a_range: float | None) -> tuple[np.ndarray, np.ndarray | None]:
+                            a_range: float | None) -> tuple[np.ndarray, np.ndarray]:
     """``clip`` less the short runs that are the forced response's own extremum.
 
     :func:`.signals.clipped_mask` takes the record's extreme value, when repeated, for
@@ -741,20 +739,19 @@ def _without_smooth_extrema(a: np.ndarray, clip: np.ndarray, nan: np.ndarray, fs
     of the smoother (over the record with the clipped samples bridged), or whose two
     neighbours lie within ``threshold`` noise sigmas of its rail, is no clip.
     Longer runs (a saturated forced response) and samples at or beyond a known range
-    stay clipped. Returns that mask and the runs cleared by their neighbours alone
-    (None when none was tried).
+    stay clipped. Returns that mask and the runs cleared by their neighbours alone.
     """
     runs = [(lo, hi) for lo, hi in _rail_runs(a, clip) if hi - lo <= _MAX_CLIP_RUN]
     if not runs:
-        return clip, None
+        return clip, np.zeros(a.size, dtype=bool)
     bad = nan | clip
     af = fill_gaps(a, bad)
     sigma = noise_sigma(af, bad)
     if not sigma > 0:
-        return clip, None
+        return clip, np.zeros(a.size, dtype=bool)
     win = smoother_window(baseline_ms, fs, a.size)
     if win < 5:
-        return clip, None
+        return clip, np.zeros(a.size, dtype=bool)
     smooth = savgol_smooth(af, win)
     out = clip.copy()
     flat = np.zeros(a.size, dtype=bool)
@@ -1104,8 +1101,8 @@ def _rest_loads(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
             # the shortest tail all below _TAIL_REL of the pulse before it (on a wall
             # whose contact is resolved, the load rises with an overshoot: its front
             # is larger, _TAIL_REL_RISE; 0.17-0.23 of the slow entry on holdout7-000)
-            rel = (_TAIL_REL_RISE if fit.models[0 if s[i] > 0 else 1].tau * fit.fs
-                   >= _TAIL_RISE_MIN else _TAIL_REL)
+            rel = (_TAIL_REL_RISE if _rises(fit.models[0 if s[i] > 0 else 1], fit.fs)
+                   else _TAIL_REL)
             q = next((q for q in range(run.size - 2, 0, -1)
                       if a[q + 1:].max() < rel * a[q]), 0)
             if q > 0:
@@ -1178,7 +1175,7 @@ def _rest_step(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
                  np.where(idx < 0, 0.0,
                           np.take_along_axis(cg, np.clip(idx, 0, 2 * H), axis=1)))
     load = -load_ratio * base[k] * (k < lift)
-    if y_kept is not None and model.tau * fit.fs >= _TAIL_RISE_MIN:
+    if y_kept is not None and _rises(model, fit.fs):
         # a late load rises through the wall's spring and damper: the step response of
         # an oscillator of the wall's contact duration, each damping of _TAIL_ZETA (the
         # instantaneous step first), the unit step's filtered rows shifted and summed;
@@ -1239,6 +1236,14 @@ def _rest_step(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
     coef = np.linalg.lstsq(np.column_stack([V, P[b]]), yw - scale[b] * Tw[b],
                            rcond=None)[0][-1]
     return (e - H, vals), grid[b], coef
+
+
+def _rises(model: PulseModel, fs: float) -> bool:
+    """Whether a late load's rise through the wall of ``model`` is resolved.
+
+    Its contact lasts :data:`_TAIL_RISE_MIN` samples or more: the overshoot is read.
+    """
+    return model.tau * fs >= _TAIL_RISE_MIN
 
 
 def _wall_rise(zeta: float, tau: float, size: int) -> np.ndarray:
