@@ -506,6 +506,11 @@ class _Tents:
         """Rows of the regression: the tents less one per free jump gain."""
         return int(self.basis().shape[0]) if self.gain_sd > 0 else self.n_rows
 
+    def sides(self) -> np.ndarray:
+        """The wall of each row's impact (+1 right, -1 left)."""
+        return np.array([self.records[r].sign[self.records[r].i_e[a]]
+                         for r, a, _ in self.rows], dtype=float).reshape(-1)
+
     def wall_jumps(self) -> np.ndarray:
         """The ball velocity jumps of the rows, one column per wall (zero elsewhere).
 
@@ -513,8 +518,7 @@ class _Tents:
         duration) adds ``eps * column`` to the rows: see :func:`_wall_scale_test`.
         """
         jumps = self.jumps()
-        side = np.array([self.records[r].sign[self.records[r].i_e[a]]
-                         for r, a, _ in self.rows]).reshape(-1)
+        side = self.sides()
         cols = [np.where(side == s, jumps, 0.0) for s in (1.0, -1.0)
                 if (side == s).any()]
         return np.array(cols).T.reshape(self.n_rows, len(cols))
@@ -530,8 +534,7 @@ class _Tents:
         Columns with fewer than 3 tents are merged into none (their tents stay tied).
         """
         jumps = self.jumps()
-        side = np.array([self.records[r].sign[self.records[r].i_e[a]]
-                         for r, a, _ in self.rows]).reshape(-1)
+        side = self.sides()
         cols = []
         for r in np.unique(self.rows[:, 0]) if self.n_rows else []:
             for s in ((1.0, -1.0),) if self.gain_per == "recording" else ((1.0,), (-1.0,)):
