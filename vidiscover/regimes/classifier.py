@@ -418,8 +418,8 @@ class RegimeModel:
         if gated and proba is None:
             proba = self.predict_proba(features)
         if clf is None:
-            clf = (proba[[str(c) for c in self.classifier.classes_]].idxmax(axis=1).to_numpy()
-                   if proba is not None else self.predict(features))
+            clf = (_top_labels(self.classifier, proba) if proba is not None
+                   else self.predict(features))
         clf = np.asarray(clf, dtype=object)
         rules = RuleBaseline().predict(_rule_frame(features))
         keep = np.isin(rules, list(self.rule_labels))
@@ -485,11 +485,8 @@ class RegimeModel:
                 f"features ({', '.join(missing[:3])}{', ...' if len(missing) > 3 else ''}); "
                 "analyze it with features=vidiscover.regimes.features.ALL_FEATURES")
         proba = self.predict_proba([feats]).iloc[0]
-        # the classifier's label from these probabilities (its predict(), without
-        # evaluating the trees a second time): the first maximum in its class order
-        clf = proba[[str(c) for c in self.classifier.classes_]].idxmax()
-        label, method = (str(v[0]) for v in self.decide([feats], clf=[clf],
-                                                          proba=proba.to_frame().T))
+        # (decide takes the classifier's label from these probabilities)
+        label, method = (str(v[0]) for v in self.decide([feats], proba=proba.to_frame().T))
         if method == "rules" and label in self.rule_proba:
             proba = pd.Series({lab: float(self.rule_proba[label].get(lab, 0.0))
                                for lab in LABELS})
@@ -553,6 +550,15 @@ def evaluate(model: RegimeModel, data: pd.DataFrame, baseline: RuleBaseline | No
     out["classify"] = _scores(y, labels)
     out["classify"]["rules_share"] = float(np.mean(methods == "rules")) if len(y) else 0.0
     return out
+
+
+def _top_labels(classifier, proba: pd.DataFrame) -> np.ndarray:
+    """The classifier's labels from its probabilities (a column per label).
+
+    As its ``predict`` gives them, without evaluating the trees again: the first
+    maximum in its class order.
+    """
+    return proba[[str(c) for c in classifier.classes_]].idxmax(axis=1).to_numpy()
 
 
 def _rule_frame(features) -> pd.DataFrame:
@@ -738,7 +744,7 @@ def fit_with_gate(data: pd.DataFrame, *, random_state: int = 0, metadata: Mappin
         part = fit_model(data.iloc[tr], random_state=random_state, **params)
         proba = part.predict_proba(data.iloc[te])
         oof_proba.iloc[te] = proba.to_numpy()
-        oof[te] = proba[[str(c) for c in part.classifier.classes_]].idxmax(axis=1).to_numpy()
+        oof[te] = _top_labels(part.classifier, proba)
     groups = _groups(data)
     gate = choose_rule_gate(y, oof, rules, oof_proba, groups=groups)
     chosen = tuple(gate)
