@@ -35,7 +35,7 @@ law so that the impact law is scored on its own:
   at 1.4 times the speed is honest; one whose band is narrow and wrong is not. The
   target line is the strict share.
 
-Figures are quoted on the ``holdout8`` split (see :mod:`vidiscover.corpus`).
+Figures are quoted on the ``holdout9`` split (see :mod:`vidiscover.corpus`).
 Measured (holdout8, 60 cases, run once, 2026-11-27, at e634b4a): constant-r walls reported
 constant 1.000 of 54; Hunt-Crossley walls within 0.03 at the third clearance 1.000 of 60
 (11 of them pooled speeds spanning less than 1.15 x; true r inside the 95 % band at 0.915
@@ -63,7 +63,7 @@ the sensors or the analysis change.
 
 Usage::
 
-    python benchmarks/bench_realism_impact_law.py [--split holdout8] [--n 60] [--n-boot 200]
+    python benchmarks/bench_realism_impact_law.py [--split holdout9] [--n 60] [--n-boot 200]
         [--cache DIR]
 """
 
@@ -225,7 +225,7 @@ def band_half_width(law, v: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.n
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout8", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout9", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--n-boot", type=int, default=200,
