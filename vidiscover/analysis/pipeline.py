@@ -249,10 +249,7 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None,
         recon = _tilted(recon, det, rec, mu, theta_deg)
     rest = estimate_restitution(recon, det, n_boot=n_boot, seed=seed)
     rm = return_map(det.t, det.side, forcing.period)
-    ctx = FeatureContext(t=det.t, side=det.side, dv=det.dv, t_start=float(rec.t[0]),
-                         t_end=float(rec.t[-1]) + 1.0 / det.sample_rate, forcing=forcing,
-                         ts=recon.t, x=recon.x_impacts, returnmap=rm)
-    features = compute_features(ctx, features)
+    features = compute_features(FeatureContext.of(det, forcing, recon, rm), features)
     warnings = list(det.warnings)
     if forcing.source != "xe":
         warnings.append("base displacement 'xe' has no usable sine: cycles are cut with the "

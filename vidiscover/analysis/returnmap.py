@@ -218,6 +218,30 @@ class FeatureContext:
     x: np.ndarray = field(repr=False)
     returnmap: ReturnMap
 
+    @classmethod
+    def of(cls, detection, forcing: Forcing, reconstruction, returnmap: ReturnMap
+           ) -> FeatureContext:
+        """The context of an analysis's parts.
+
+        The one construction used by :func:`~vidiscover.analysis.analyze` and by
+        :func:`vidiscover.regimes.dataset.feature_context` (features of another set on
+        an analysis already made), so that both see the same record span:
+        ``detection.t0`` to ``t0 + n_samples / sample_rate``.
+
+        Parameters
+        ----------
+        detection : Detection
+            The impacts (``t``, ``side``, ``dv``) and the record's span.
+        forcing : Forcing
+        reconstruction : Reconstruction
+            Its sample times ``t`` and LO displacement ``x_impacts``.
+        returnmap : ReturnMap
+        """
+        t0 = float(detection.t0)
+        return cls(t=detection.t, side=detection.side, dv=detection.dv, t_start=t0,
+                   t_end=t0 + detection.n_samples / detection.sample_rate, forcing=forcing,
+                   ts=reconstruction.t, x=reconstruction.x_impacts, returnmap=returnmap)
+
     @property
     def period(self) -> float:
         """Forcing period (s)."""

@@ -283,11 +283,8 @@ def feature_context(analysis):
     """
     from ..analysis.returnmap import FeatureContext
 
-    det = analysis.detection
-    return FeatureContext(t=det.t, side=det.side, dv=det.dv, t_start=float(det.t0),
-                          t_end=float(det.t0) + det.n_samples / det.sample_rate,
-                          forcing=analysis.forcing, ts=analysis.reconstruction.t,
-                          x=analysis.reconstruction.x_impacts, returnmap=analysis.returnmap)
+    return FeatureContext.of(analysis.detection, analysis.forcing, analysis.reconstruction,
+                             analysis.returnmap)
 
 
 def simulate_case(case: Case) -> dict:
