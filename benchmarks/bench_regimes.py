@@ -144,12 +144,17 @@ def main(argv=None) -> int:
                  "pick another")
     out: dict = {"model": args.model or "shipped default", "seed": args.seed,
                  "rule_labels": list(model.rule_labels),
-                 "rule_min_proba": dict(model.rule_min_proba), "targets": TARGETS, "sets": {}}
+                 "rule_min_proba": dict(model.rule_min_proba),
+                 "rule_gate": model.metadata.get("rule_gate"), "targets": TARGETS, "sets": {}}
     if not args.json:
         gate = ", ".join(f"{lab}" + (f" (classifier p >= {model.rule_min_proba[lab]:.2f})"
                                      if model.rule_min_proba.get(lab, 0) > 0 else "")
                          for lab in model.rule_labels) or "none"
-        print(f"classify takes the rules' label for: {gate}\n")
+        how = model.metadata.get("rule_gate") or {}
+        chosen = (f" (chosen over {how['repeats']} out-of-fold repeats, the classifier "
+                  f"taking a label only on a win beyond {how['margin']:g} standard errors)"
+                  if how.get("repeats") else " (chosen on the sign of one out-of-fold gain)")
+        print(f"classify takes the rules' label for: {gate}{chosen}\n")
     for name in [s for s in args.sets.split(",") if s]:
         t0 = time.perf_counter()
         key = args.corpus_split if name == "corpus_test" else f"{args.seed}-{args.n}"

@@ -927,6 +927,7 @@ def _fit_and_report(data: pd.DataFrame, tests: Mapping[str, pd.DataFrame], *, se
     model, gate = fit_with_gate(data, random_state=seed, metadata=meta)
     model.metadata["rule_labels"] = list(model.rule_labels)
     model.metadata["rule_min_proba"] = dict(model.rule_min_proba)
+    model.metadata["rule_gate"] = {"repeats": gate.get("repeats"), "margin": gate.get("margin")}
     # a few training rows, recomputed by the test suite: the model must keep coming
     # out of its own command (a change to the simulator, sensors or analysis moves them)
     model.metadata["probe"] = probe_rows(data)
