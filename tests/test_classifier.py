@@ -424,6 +424,8 @@ def test_the_folds_spread_widens_the_margin():
     assert choose_rule_gate(y, clf, rules, folds=spread) == {"multi_ipc": 0.0}
     with pytest.raises(InputError, match="folds have shape"):
         choose_rule_gate(y, clf, rules, folds=folds[:10])
+    with pytest.raises(InputError, match="classifier labels for 60 recordings"):
+        choose_rule_gate(y, clf[:50], rules)
 
 
 def test_classify_keeps_a_rule_label_from_its_least_probability(small_sets, small_model):
