@@ -669,7 +669,11 @@ def choose_rule_gate(y, clf_pred, rule_pred, clf_proba=None, min_cases: int = 5,
     (``multi_ipc`` at -1.02 and ``smr`` at -1.41 dropped on one draw, kept on the
     three others), 2 leaves every one 0.59 away and gave the same labels on all
     four. With no recording the rules win, the classifier needs 5 clean wins of
-    equal weight.
+    equal weight. On a full-size draw (22005) the old gate's three out-of-fold
+    repeats gave three label sets (one without ``2ipc_sym``). What still moves
+    between draws is the other test: the rules right in more than half of the
+    rows where they say the label, unweighted, which decides ``no_impact`` and
+    ``smr`` on the 5-9 other-rig rows where the rules say them.
 
     Parameters
     ----------
