@@ -620,7 +620,8 @@ def choose_rule_gate(y, clf_pred, rule_pred, clf_proba=None, min_cases: int = 5,
     label is right in more than half of them and the classifier's is not right
     more often by more than ``margin`` standard errors (each recording counted with
     the weight of its true label in its group, 1 / its recordings, as balanced
-    accuracy counts).
+    accuracy counts). "More than half" is within the same margin: more than
+    ``0.5 - margin * 0.5 / sqrt(n)`` of the group's ``n`` recordings.
 
     The margin: the gain of the rules over the classifier is a sum over the
     recordings of ``w (rules right - classifier right)``. Its standard error is
@@ -670,10 +671,12 @@ def choose_rule_gate(y, clf_pred, rule_pred, clf_proba=None, min_cases: int = 5,
     three others), 2 leaves every one 0.59 away and gave the same labels on all
     four. With no recording the rules win, the classifier needs 5 clean wins of
     equal weight. On a full-size draw (22005) the old gate's three out-of-fold
-    repeats gave three label sets (one without ``2ipc_sym``). What still moves
-    between draws is the other test: the rules right in more than half of the
-    rows where they say the label, unweighted, which decides ``no_impact`` and
-    ``smr`` on the 5-9 other-rig rows where the rules say them.
+    repeats gave three label sets (one without ``2ipc_sym``). The test "right in
+    more than half" is within the margin too: taken exactly, it decided
+    ``no_impact`` and ``smr`` on the 5-9 other-rig rows where the rules say them,
+    and moved between draws (22003 without ``no_impact``, its subsample 22211
+    with it; 22005 without ``smr``, where the rules were ahead of the classifier
+    on both rigs).
 
     Parameters
     ----------
@@ -738,7 +741,10 @@ def choose_rule_gate(y, clf_pred, rule_pred, clf_proba=None, min_cases: int = 5,
                 if m.sum() >= min_cases:
                     gain, (se_rows, se_folds) = float(diff[m].sum()), spread(m)
                     se = max(se_rows, se_folds)
-                    ok = bool(rule_right[m].mean() > 0.5 and gain >= -margin * se - 1e-12)
+                    # right in more than half, within the same margin (a share's
+                    # standard error at one half is 0.5 / sqrt(n))
+                    half = 0.5 - margin * 0.5 / math.sqrt(m.sum())
+                    ok = bool(rule_right[m].mean() > half and gain >= -margin * se - 1e-12)
                     verdicts.append(ok)
                     if details is not None and t == 0:
                         details.setdefault(lab, {})[str(g)] = {
