@@ -1058,6 +1058,7 @@ _TAIL_AMP = (0.3, 1.0)   # ... may be a late load step: its fitted amplitude ove
 _TAIL_ZETA = (0.05, 0.1, 0.2, 0.35, 0.5)
 _TAIL_RISE_MIN = 2.0     # ... for contacts of at least this many samples (ringing >= 4)
 _TAIL_REL_RISE = 0.25    # ... where a tail is all below this share of the pulse before
+_REST_BATCH = 80000      # entries x window samples of the step searches made together
 
 
 def _add_loads(y: np.ndarray, loads, sign: float) -> np.ndarray:
@@ -1158,11 +1159,12 @@ def _rest_loads(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
     h = win // 2
     out, entries, drop = [], [], []
     scratch = None          # y with a tail's weak pulses put back (one copy, restored)
-    for i, prev, run in cand:
-        gap = pos[i] - pos[prev]
-        p_hi = min(pos[i] + max(_REST_GAPS * gap, 3.0), float(lift[i]) - 1.0, pos[i] + h)
-        got = _rest_step(fit, y, base, bad, load_ratio, sigma, h, i, lift[i],
-                         pos[i] + 0.5, p_hi, None)
+    # every run's step searched at once (the same values as one _rest_step each)
+    firsts = _rest_scan(fit, y, base, bad, load_ratio, sigma, h, [
+        (i, lift[i], pos[i] + 0.5,
+         min(pos[i] + max(_REST_GAPS * (pos[i] - pos[prev]), 3.0), float(lift[i]) - 1.0,
+             pos[i] + h)) for i, prev, _ in cand])
+    for (i, _, run), got in zip(cand, firsts):
         tail_step = False
         if got is None and late:
             # a late load taken for weak pulses: the step searched from the stronger
@@ -1211,6 +1213,108 @@ def _rest_loads(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
     return out, np.array(entries), np.array(drop, dtype=np.int64)
 
 
+def _rest_scan(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
+               load_ratio: float, sigma: float, h: int, items) -> list:
+    """:func:`_rest_step` (without ``y_kept``) of each ``(i, lift, p_lo, p_hi)`` in ``items``.
+
+    The same values as one call each (elementwise operations, reductions along rows,
+    and one LAPACK / BLAS call per matrix, as numpy's stacked ``qr`` and ``matmul`` make
+    them), computed together for the searches of the same shape (side, entries, window,
+    none of its samples bad): on the paper's Table-2 recording 41 searches, 60 % of
+    ``analyze`` one by one. The others are made one by one.
+    """
+    n = fit.n_samples
+    pos = fit.pos
+    res: list = [None] * len(items)
+    groups: dict = {}
+    for m, (i, lift, p_lo, p_hi) in enumerate(items):
+        side = 0 if fit.amp[i] >= 0 else 1
+        ci = int(np.clip(np.rint(pos[i]), 0, n - 1))
+        if p_hi <= p_lo:
+            continue
+        k0, k1 = max(ci - h, 0), min(int(math.ceil(p_hi)) + h, n)
+        if k1 - k0 < 12:
+            continue
+        grid = np.arange(p_lo, p_hi + 1e-9, _REST_STEP)
+        if bad[k0:k1].any():
+            res[m] = _rest_step(fit, y, base, bad, load_ratio, sigma, h, i, lift, p_lo, p_hi,
+                                None)
+            continue
+        groups.setdefault((side, grid.size, k1 - k0), []).append((m, i, lift, k0, grid))
+    # (at most _REST_BATCH entries x window samples at once: larger batches' arrays fall
+    # out of the cache, 1.5 times the CPU on the Table-2 recording)
+    chunks = [(key, grp[c:c + max(1, _REST_BATCH // (key[1] * key[2]))])
+              for key, grp in groups.items()
+              for c in range(0, len(grp), max(1, _REST_BATCH // (key[1] * key[2])))]
+    for (side, _, nk), grp in chunks:
+        model = fit.models[side]
+        H = model.span(fit.fs) + 1
+        pk = fit.peaks[side]
+        ms = [m for m, *_ in grp]
+        ii = np.array([i for _, i, *_ in grp])
+        lift = np.array([lf for _, _, lf, _, _ in grp])
+        k = np.array([k0 for *_, k0, _ in grp])[:, None] + np.arange(nk)[None, :]
+        grid = np.stack([gr for *_, gr in grp])                           # (n, G)
+        fl = np.floor(grid)
+        # a row of the kernel (and of its cumulative sum) is a function of the entry's
+        # fraction of a sample alone: each fraction once (a grid of quarter samples
+        # holds about 4 per search), padded with the values before and after it
+        frac, inv = np.unique(grid - fl, return_inverse=True)
+        jj = np.arange(-H, H + 1, dtype=float)
+        g1 = model.kernel(jj[None, :] - frac[:, None], fit.fs)
+        gp = np.zeros((frac.size, 2 * H + 3))
+        gp[:, 1:-1] = g1
+        cp = np.ones((frac.size, 2 * H + 3))
+        cp[:, 0] = 0.0
+        cp[:, 1:-1] = np.cumsum(g1, axis=1) / np.maximum(g1.sum(axis=1, keepdims=True),
+                                                          1e-300)
+        # (n, G, K) indices into the padded rows: the step 0 before, 1 after the kernel
+        at = (np.clip(k[:, None, :] - fl.astype(np.int64)[:, :, None] + (H + 1), 0,
+                      2 * H + 2) + (inv.reshape(grid.shape) * (2 * H + 3))[:, :, None])
+        load = -load_ratio * base[k] * (k < lift[:, None])
+        P = gp.ravel()[at]
+        P /= pk
+        Tw = cp.ravel()[at]
+        Tw *= load[:, None, :]
+        del at
+        kw = k.astype(float)
+        d = kw - pos[ii][:, None]
+        kv = model.kernel(np.stack([d, d + 0.25, d - 0.25]), fit.fs)
+        x = (kw - k.mean(axis=1, keepdims=True)) / nk
+        V = np.concatenate([np.vander(x.ravel(), 4).reshape(len(grp), nk, 4),
+                            (kv[0] / pk)[:, :, None], ((kv[1] - kv[2]) / pk)[:, :, None]],
+                           axis=2)
+        Q = np.linalg.qr(V)[0]
+        Qt = Q.transpose(0, 2, 1)
+        yw = y[k]
+        y0 = yw - (Q @ (Qt @ yw[:, :, None]))[:, :, 0]
+        # (in place where the values are the same: these arrays are the search's bulk)
+        T = Tw - (Tw @ Q) @ Qt
+        u = P - (P @ Q) @ Qt
+        u /= np.maximum(np.sqrt(np.einsum("ngw,ngw->ng", u, u)), 1e-300)[:, :, None]
+        r0 = u * (u @ y0[:, :, None])
+        np.subtract(y0[:, None, :], r0, out=r0)
+        ut = u * np.einsum("ngw,ngw->ng", u, T)[:, :, None]
+        T -= ut
+        R = np.subtract(r0, T, out=ut)
+        rss = np.einsum("ngw,ngw->ng", R, R)
+        for j, b in enumerate(np.argmin(rss, axis=1)):
+            gain = float(r0[j, b] @ r0[j, b] - rss[j, b])
+            Tb = 1.0 * T[j, b]
+            if not (gain > _REST_DCHI2 * sigma ** 2 and gain > _REST_SHARE * float(Tb @ Tb)):
+                continue
+            e = int(np.floor(grid[j, b]))
+            kk = np.arange(e - H, int(lift[j]))
+            gi = kk - e + H
+            vals = -load_ratio * base[np.clip(kk, 0, n - 1)]
+            vals *= np.where(gi > 2 * H, 1.0, cp[inv.reshape(grid.shape)[j, b]][
+                np.clip(gi, 0, 2 * H) + 1])
+            coef = np.linalg.lstsq(np.column_stack([V[j], P[j, b]]), yw[j] - Tw[j, b],
+                                   rcond=None)[0][-1]
+            res[ms[j]] = (e - H, vals), grid[j, b], coef
+    return res
+
+
 def _rest_step(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
                load_ratio: float, sigma: float, h: int, i: int, lift: int,
                p_lo: float, p_hi: float, y_kept: np.ndarray | None):
@@ -1245,6 +1349,12 @@ def _rest_step(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
                  np.where(idx < 0, 0.0,
                           np.take_along_axis(cg, np.clip(idx, 0, 2 * H), axis=1)))
     load = -load_ratio * base[k] * (k < lift)
+    pk = fit.peaks[side]
+    # the entry pulse of each entry, at kw - grid = (k - floor(grid)) - frac(grid), both
+    # exact: the kernel rows g already hold it (zero beyond the support)
+    iw = idx[:, w]
+    P = np.where((iw >= 0) & (iw <= 2 * H),
+                 np.take_along_axis(g, np.clip(iw, 0, 2 * H), axis=1), 0.0) / pk
     if y_kept is not None and _rises(model, fit.fs):
         # a late load rises through the wall's spring and damper: the step response of
         # an oscillator of the wall's contact duration, each damping of _TAIL_ZETA (the
@@ -1254,17 +1364,16 @@ def _rest_step(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
         G = np.concatenate([G] + [_rise_rows(G, _wall_rise(z, model.tau * fit.fs, k.size))
                                   for z in _TAIL_ZETA])
         grid = np.tile(grid, len(_TAIL_ZETA) + 1)
+        P = np.tile(P, (len(_TAIL_ZETA) + 1, 1))
     Tw = (G * load[None, :])[:, w]
     # local cubic, a correction of the last pulse (area and time: its fit was made
     # over the blurred step) and a pulse at the entry (the last, weakest bounces
     # come with it)
-    pk = fit.peaks[side]
     kw = k[w].astype(float)
-    V = np.column_stack([np.vander((kw - k.mean()) / k.size, 4),
-                         model.kernel(kw - pos[i], fit.fs) / pk,
-                         (model.kernel(kw - pos[i] + 0.25, fit.fs)
-                          - model.kernel(kw - pos[i] - 0.25, fit.fs)) / pk])
-    P = model.kernel(kw[None, :] - grid[:, None], fit.fs) / pk
+    d = kw - pos[i]
+    kv = model.kernel(np.concatenate([d, d + 0.25, d - 0.25]), fit.fs).reshape(3, -1)
+    V = np.column_stack([np.vander((kw - k.mean()) / k.size, 4), kv[0] / pk,
+                         (kv[1] - kv[2]) / pk])
     # projections off [V, P_g] per entry g: off V once, then off P_g's remainder
     Q, _ = np.linalg.qr(V)
     yw = y[k][w]
