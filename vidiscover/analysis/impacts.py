@@ -76,6 +76,7 @@ from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
+from numpy.lib.stride_tricks import sliding_window_view
 
 from ..errors import InputError
 from ..params import G_ACCEL
@@ -1262,21 +1263,25 @@ def _rest_scan(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
         frac, inv = np.unique(grid - fl, return_inverse=True)
         jj = np.arange(-H, H + 1, dtype=float)
         g1 = model.kernel(jj[None, :] - frac[:, None], fit.fs)
-        gp = np.zeros((frac.size, 2 * H + 3))
-        gp[:, 1:-1] = g1
-        cp = np.ones((frac.size, 2 * H + 3))
-        cp[:, 0] = 0.0
-        cp[:, 1:-1] = np.cumsum(g1, axis=1) / np.maximum(g1.sum(axis=1, keepdims=True),
-                                                          1e-300)
-        # (n, G, K) indices into the padded rows: the step 0 before, 1 after the kernel
-        at = (np.clip(k[:, None, :] - fl.astype(np.int64)[:, :, None] + (H + 1), 0,
-                      2 * H + 2) + (inv.reshape(grid.shape) * (2 * H + 3))[:, :, None])
+        # the (n, G, K) rows are windows of the kernel rows, padded with what they are
+        # before (0) and after (0 for the kernel, 1 for the normalised step): the window
+        # of an entry at floor e starts at k0 - e + H of the row (k0 its first sample)
+        off = k[:, :1] - fl.astype(np.int64) + H                          # (n, G)
+        lo = max(0, -int(off.min()))
+        hi = max(0, int(off.max()) + nk - 2 * H - 1)
+        w0 = lo + 2 * H + 1 + hi
+        gp = np.zeros((frac.size, w0))
+        gp[:, lo:lo + 2 * H + 1] = g1
+        cp = np.ones((frac.size, w0))
+        cp[:, :lo] = 0.0
+        cp[:, lo:lo + 2 * H + 1] = np.cumsum(g1, axis=1) / np.maximum(
+            g1.sum(axis=1, keepdims=True), 1e-300)
+        row = inv.reshape(grid.shape)
         load = -load_ratio * base[k] * (k < lift[:, None])
-        P = gp.ravel()[at]
+        P = sliding_window_view(gp, nk, axis=1)[row, off + lo]
         P /= pk
-        Tw = cp.ravel()[at]
+        Tw = sliding_window_view(cp, nk, axis=1)[row, off + lo]
         Tw *= load[:, None, :]
-        del at
         kw = k.astype(float)
         d = kw - pos[ii][:, None]
         kv = model.kernel(np.stack([d, d + 0.25, d - 0.25]), fit.fs)
@@ -1289,8 +1294,10 @@ def _rest_scan(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
         yw = y[k]
         y0 = yw - (Q @ (Qt @ yw[:, :, None]))[:, :, 0]
         # (in place where the values are the same: these arrays are the search's bulk)
-        T = Tw - (Tw @ Q) @ Qt
-        u = P - (P @ Q) @ Qt
+        T = (Tw @ Q) @ Qt
+        np.subtract(Tw, T, out=T)
+        u = (P @ Q) @ Qt
+        np.subtract(P, u, out=u)
         u /= np.maximum(np.sqrt(np.einsum("ngw,ngw->ng", u, u)), 1e-300)[:, :, None]
         r0 = u * (u @ y0[:, :, None])
         np.subtract(y0[:, None, :], r0, out=r0)
@@ -1307,8 +1314,7 @@ def _rest_scan(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
             kk = np.arange(e - H, int(lift[j]))
             gi = kk - e + H
             vals = -load_ratio * base[np.clip(kk, 0, n - 1)]
-            vals *= np.where(gi > 2 * H, 1.0, cp[inv.reshape(grid.shape)[j, b]][
-                np.clip(gi, 0, 2 * H) + 1])
+            vals *= np.where(gi > 2 * H, 1.0, cp[row[j, b]][np.clip(gi, 0, 2 * H) + lo])
             coef = np.linalg.lstsq(np.column_stack([V[j], P[j, b]]), yw[j] - Tw[j, b],
                                    rcond=None)[0][-1]
             res[ms[j]] = (e - H, vals), grid[j, b], coef
