@@ -118,8 +118,10 @@ def train(out, seed, n, n_test, n_realism, n_corpus_train, n_corpus_test, schedu
     recorded and analysed; the classifier learns their true regime from the
     features of the recordings and is scored on a held-out sweep simulated with
     other seeds (balanced accuracy, recall per label, confusion table), beside the
-    rule-based baseline. The model keeps the rules' label for the labels where the
-    rules beat the classifier out of fold (``rule_labels`` in the report).
+    rule-based baseline. The model keeps the rules' label for every label unless the
+    classifier beats the rules out of fold by more than 2 standard errors (3 repeats
+    of the out-of-fold predictions) and where the rules are right in about half or
+    more (``rule_labels`` in the report).
     """
     import time
 
