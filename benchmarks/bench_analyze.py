@@ -6,7 +6,9 @@ sensors) with its pulse response known (``pulse=PulseModel()``, the exact engine
 default sensors, as ``bench_cli.py`` times it; ``bench_cli.py``'s recording has one
 constant r and 82 impacts, this one the paper's Table 2 walls, 164 impacts in chatter
 runs, whose ends the resting-load search visits: about 3 times as long, 18.6
-against 6.0 ms on an idle 2-core machine, 2026-11-26), ``N``
+against 6.0 ms on an idle 2-core machine, 2026-11-26; 14.5 ms median, 13.6 best, on
+2026-11-27 after the searches were batched, 578f987-2c7bd81, with the same
+detections), ``N``
 runs after one warm-up, median
 and best wall-clock time and the best CPU time, with the bootstrap at its default
 (``n_boot=1000``) and small (100, 0), printed next to DESIGN.md section 8's 6 ms target

@@ -180,6 +180,15 @@ asym, a 1 ms contact named inclination, 2ipc_sym clearance errors called none (2
 no-impact friction and a -2.5 deg 2ipc_asym tilt called clearance; a multi_ipc asym +
 friction named asym + clearance.
 
+Latest fresh draws (2026-11-27, ``--drawn 24 --n-jobs 1`` each, run once at 209dbb3;
+gap code as at 19101-19107's quote, detection changed only on saturated records):
+21101 top-1 16/16, none 4/4, pairs 3/4, coverage 0.935; 21103 16/16, 4/4, 3/4, 0.833;
+21107 15/16 (a 2ipc_asym speed law named asym), 4/4, 3/4, 0.857: top-1 47/48, none
+12/12, pairs 9/12 (a multi_ipc asym + tilt whose tilt is undetectable, 1.08 < 4, named
+asym; a no_impact asym + friction named clearance + friction; a chaotic asym + tilt
+named tilt + speed law). Seeds 19101/19103/19107 before: top-1 42/48, none 11/12,
+pairs 11/12. Battery (seed 0): top-1 54/57, none 11/11, pairs 5/6, coverage 0.943.
+
 Usage::
 
     python benchmarks/bench_gap.py [--quick | --ci | --drawn N] [--n-jobs 2] [--seed 0]

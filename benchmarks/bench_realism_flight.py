@@ -30,7 +30,9 @@ The recordings are simulated again for their truth (the analyses come from the c
 Figures are quoted on the held-back ``holdout9`` split (``test`` and ``holdout`` to
 ``holdout8`` were looked at case by case); ``--split dev`` is for tuning.
 
-Measured (holdout8, 60 cases, run once, 2026-11-27, at e634b4a): identified 7, all within
+Measured (holdout9, 60 cases, run once, 2026-11-27, at 209dbb3): identified 5, all within
+(0.083; target 0.9: 005, 011, 038, 044, 058), outside 0, bad 0; 1 input error (holdout9-025:
+1 usable impact for 5 candidate terms). Earlier (holdout8, at e634b4a): identified 7, all within
 (0.117; target 0.9: 003, 010, 014, 030, 052, 058, 059), outside 0, bad 0, no input error.
 Earlier (holdout7, at 8fdbcdd): identified 3, all within
 (0.050; target 0.9), outside 0, bad 0; 1 input error (holdout7-037: no impact read, the

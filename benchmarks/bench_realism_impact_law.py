@@ -36,7 +36,12 @@ law so that the impact law is scored on its own:
   target line is the strict share.
 
 Figures are quoted on the ``holdout9`` split (see :mod:`vidiscover.corpus`).
-Measured (holdout8, 60 cases, run once, 2026-11-27, at e634b4a): constant-r walls reported
+Measured (holdout9, 60 cases, run once, 2026-11-27, at 209dbb3): constant-r walls reported
+constant 0.984 of 64 (014 left read Hunt-Crossley); Hunt-Crossley walls within 0.03 at the
+third clearance 0.963 of 54 (013 left: a constant read at the pooled clearances, rms 0.061
+at b x 0.67 with a band 0.153 wide; 049 right: 1 - 0.573 v^2, rms 0.048 up to 1.39 v_max;
+true r inside the 95 % band at 0.912 of 3017 impacts). Earlier (holdout8, at e634b4a):
+constant-r walls reported
 constant 1.000 of 54; Hunt-Crossley walls within 0.03 at the third clearance 1.000 of 60
 (11 of them pooled speeds spanning less than 1.15 x; true r inside the 95 % band at 0.915
 of 3288 impacts). Earlier (holdout7, at 8fdbcdd): constant-r walls reported
