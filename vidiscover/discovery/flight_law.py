@@ -868,6 +868,15 @@ def _ols_variances(X: np.ndarray, Y: np.ndarray, floor: float):
         return None
 
 
+def _theta_se(const: float, se_c: float) -> float:
+    """Standard error (deg) of theta from its constant's coefficient and standard error.
+
+    The constant is ``g sin(theta)``: its error divided by ``g cos(theta)``.
+    """
+    s = float(np.clip(const / G_ACCEL, -0.99, 0.99))
+    return float(np.degrees(se_c / G_ACCEL / math.sqrt(1 - s * s)))
+
+
 def _standard_errors(X: np.ndarray, Y: np.ndarray, floor: float) -> tuple[float, float]:
     """Standard errors of mu and theta (deg) of the (constant, friction) fit ``X``.
 
@@ -879,8 +888,7 @@ def _standard_errors(X: np.ndarray, Y: np.ndarray, floor: float) -> tuple[float,
         return math.inf, math.inf
     coef, var = fit
     se_c, se_f = np.sqrt(np.clip(var, 0.0, None))
-    s = float(np.clip(coef[0] / G_ACCEL, -0.99, 0.99))
-    return float(se_f / G_ACCEL), float(np.degrees(se_c / G_ACCEL / math.sqrt(1 - s * s)))
+    return float(se_f / G_ACCEL), _theta_se(coef[0], se_c)
 
 
 def _support_errors(Theta: np.ndarray, Y: np.ndarray, support: Sequence[int], jc: int,
@@ -901,9 +909,7 @@ def _support_errors(Theta: np.ndarray, Y: np.ndarray, support: Sequence[int], jc
     coef, var = fit
     se = dict(zip(support, np.sqrt(np.clip(var, 0.0, None)), strict=True))
     mu_se = float(se[jf] / G_ACCEL) if jf in se else 0.0
-    s = float(np.clip(coef[support.index(jc)] / G_ACCEL, -0.99, 0.99)) if jc in se else 0.0
-    theta_se = (float(np.degrees(se[jc] / G_ACCEL / math.sqrt(1 - s * s))) if jc in se
-                else 0.0)
+    theta_se = _theta_se(coef[support.index(jc)], se[jc]) if jc in se else 0.0
     return mu_se, theta_se
 
 
@@ -1120,10 +1126,10 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
     tents = _Tents(records, library, gain_sd=gain_sd, gain_per=jump_gain_per,
                    depth_free=depth_free)
     if tents.n < len(library) + 5:
-        raise InputError(f"only {tents.n_rows} usable impacts (tents; "
-                         f"{tents.n_rows - tents.n} go to the pulse areas' gains per "
-                         f"recording and wall) for {len(library)} "
-                         "candidate terms; analyse longer or more recordings")
+        taken = (f"; {tents.n_rows - tents.n} go to the free gains and penetration depths"
+                 if tents.transformed else "")
+        raise InputError(f"only {tents.n_rows} usable impacts (tents{taken}) for "
+                         f"{len(library)} candidate terms; analyse longer or more recordings")
 
     jc, jf = library.index(_CONSTANT), library.index(_FRICTION)
     jrms = float(np.sqrt(np.mean(tents.jumps() ** 2)))
