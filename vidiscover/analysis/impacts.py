@@ -485,7 +485,10 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
         # forced response cuts its chord (13 samples at 2560 Hz of a 19 Hz,
         # 500 m/s^2 response sag by 25 m/s^2, more than the pulses: the spurious
         # pulses fitted to that sag then feed the next smooth part)
-        sm = af - fit.render() if sm is None else sm
+        # the fitted pulses, rendered once (the saturated bridge holds sm + them beyond
+        # the rail)
+        pulses = fit.render() if sm is None or fit.sat is not None else None
+        sm = af - pulses if sm is None else sm
         mask = bad.copy() if bad.any() else np.zeros(n, dtype=bool)
         if hide is not None:
             mask |= hide
@@ -517,7 +520,7 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
             sm += prev
         if fit.sat is not None:
             _bridge_saturated(sm, mask, fit.sat if hide is None else fit.sat | hide, 2 * win)
-            _beyond_rail(sm, a, fit.sat, fit.render())
+            _beyond_rail(sm, a, fit.sat, pulses)
         return sm
 
     # round 0: the strong pulses over a first (pulse-contaminated) smooth part
