@@ -35,7 +35,7 @@ law so that the impact law is scored on its own:
   at 1.4 times the speed is honest; one whose band is narrow and wrong is not. The
   target line is the strict share.
 
-Figures are quoted on the ``holdout9`` split (see :mod:`vidiscover.corpus`).
+Figures are quoted on the ``holdout10`` split (see :mod:`vidiscover.corpus`).
 Measured (holdout9, 60 cases, run once, 2026-11-27, at 209dbb3): constant-r walls reported
 constant 0.984 of 64 (014 left read Hunt-Crossley); Hunt-Crossley walls within 0.03 at the
 third clearance 0.963 of 54 (013 left: a constant read at the pooled clearances, rms 0.061
@@ -68,7 +68,7 @@ the sensors or the analysis change.
 
 Usage::
 
-    python benchmarks/bench_realism_impact_law.py [--split holdout9] [--n 60] [--n-boot 200]
+    python benchmarks/bench_realism_impact_law.py [--split holdout10] [--n 60] [--n-boot 200]
         [--cache DIR]
 """
 
@@ -230,7 +230,7 @@ def band_half_width(law, v: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.n
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout9", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout10", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--n-boot", type=int, default=200,
