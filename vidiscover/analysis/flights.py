@@ -15,11 +15,10 @@ import math
 
 import numpy as np
 
-from ..acquisition import shape_centroid
 from ..errors import InputError
 from ..params import G_ACCEL
 from .friction import solve_flights
-from .reconstruction import contact_durations
+from .reconstruction import contact_durations, force_centroids
 
 __all__ = ["FlightData", "STEPS", "force_centroids", "reconstruct_flights",
            "solve_free_flights"]
@@ -194,42 +193,6 @@ class FlightData:
     def lo_acceleration(self, tq):
         """Smooth LO acceleration (m/s^2) at times ``tq`` (the detection's baseline)."""
         return np.interp(np.asarray(tq, float), self._t, self._acc)
-
-
-def force_centroids(det, tau: np.ndarray | None = None) -> np.ndarray:
-    """Time (s) from each detected contact entry to the centroid of its force.
-
-    The learned pulse response's contact shape per wall (``shape_centroid(skew, phase)
-    tau``), or the given pulse model's; 0 for instantaneous impacts. The detection fits
-    each pulse's timing through its centroid, so the entry plus this is the force's
-    centroid as the data place it, even where the learned duration is off
-    (Hunt-Crossley walls: learned 27-65 % too long on holdout6-006/-010, the centroids
-    within 2-5 us of the true equivalent impacts).
-
-    Parameters
-    ----------
-    det : ImpactDetection
-    tau : ndarray, optional
-        Contact durations per impact (:func:`contact_durations`), when known.
-
-    Returns
-    -------
-    ndarray
-        One value per detected impact (s).
-    """
-    sign = np.asarray(det.sign, dtype=float)
-    if tau is None:
-        tau = contact_durations(det)
-    resp = getattr(det, "response", None)
-    if resp is not None:
-        frac = [shape_centroid(float(getattr(m, "skew", 0.0)), float(getattr(m, "phase", 0.0)))
-                for m in (resp.model_for(1), resp.model_for(-1))]
-    else:
-        m = getattr(det, "pulse", None)
-        frac = [shape_centroid(float(getattr(m, "skew", 0.0) or 0.0),
-                               float(getattr(m, "phase", 0.0) or 0.0))] * 2
-    out = np.where(sign > 0, frac[0], frac[1]) * np.asarray(tau, float)
-    return np.where(np.isfinite(out) & (out > 0), out, 0.0)
 
 
 def reconstruct_flights(t_s, t_e, y_s, y_e, v_start, v_end, lo_velocity, lo_acceleration,
