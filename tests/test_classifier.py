@@ -30,6 +30,7 @@ from vidiscover.regimes.dataset import PARAM_RANGES, draw_cases, draw_realism_ca
 from vidiscover.regimes.features import (
     ALL_FEATURES,
     IMPACT_FEATURES,
+    MERGED_FEATURES,
     REGIME_FEATURES,
     STATE_FEATURES,
 )
@@ -64,7 +65,7 @@ def _locked(n_cycles=40, lag=0.03):
 
 def test_regime_features_are_an_explicit_set_importing_registers_nothing():
     assert list(ALL_FEATURES) == [*ANALYSIS_FEATURES, *REGIME_FEATURES, *STATE_FEATURES,
-                                  *IMPACT_FEATURES]
+                                  *IMPACT_FEATURES, *MERGED_FEATURES]
     assert not set(REGIME_FEATURES) & set(ANALYSIS_FEATURES)
     assert list(compute_features(_ctx(*_locked()))) == list(ANALYSIS_FEATURES)
 
@@ -125,6 +126,32 @@ def test_weak_detections_leave_the_strong_impacts_and_their_repetition():
     drift = _all(_ctx(t + 0.001 * T * k, side, dv=dv))
     assert drift["impact_period_error"] == pytest.approx(0.001, rel=1e-6)
     assert drift["strobe_period_error"] < 1e-9                 # the LO sine repeats
+
+
+def test_a_same_wall_pulse_0_04_periods_after_an_impact_is_part_of_it():
+    """One right impact per cycle and its first rebound detected 0.04 T later at 0.2 of
+    its dv (a ball resting on a tilted rig's wall, paper-rig 21001 #25): one impact per
+    cycle as the labels count it (RETURN_TAU), 1ipc to the rules; the plain
+    features count two same-wall impacts (multi_ipc before the merge). At 0.07 T the
+    pulse is an impact of its own."""
+    def features(lag):
+        t = np.sort(np.r_[np.arange(40) * T + 0.01, np.arange(40) * T + 0.01 + lag * T])
+        side = np.array(["right"] * t.size)
+        dv = np.tile([0.01, 0.002], 40)
+        return _all(_ctx(t, side, dv=dv))
+
+    f = features(0.04)
+    assert f["impacts_per_cycle"] == 2.0 and f["one_per_cycle_share"] == 0.0
+    assert f["merged_per_cycle"] == 1.0 and f["merged_one_share"] == 1.0
+    assert f["merged_cycle_share"] == 1.0 and f["merged_two_share"] == 0.0
+    assert f["merged_alternation"] == 0.0 and math.isnan(f["merged_asymmetry"])
+    frame = pd.DataFrame([f])
+    assert list(RuleBaseline().predict(frame)) == ["1ipc"]
+    plain = frame.drop(columns=list(MERGED_FEATURES))     # a table from before the merge
+    assert list(RuleBaseline().predict(plain)) == ["multi_ipc"]
+    f = features(0.07)
+    assert f["merged_per_cycle"] == 2.0 and f["merged_two_share"] == 1.0
+    assert list(RuleBaseline().predict(pd.DataFrame([f]))) == ["multi_ipc"]
 
 
 def test_random_impacts_are_not_locked():

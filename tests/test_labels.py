@@ -108,10 +108,16 @@ def test_simulated_huge_clearance_has_no_impact():
 
 
 def test_simulated_low_left_restitution_chatters_into_multi_ipc():
+    from vidiscover.regimes import labels
+
     res = simulate(preset("paper", b=0.009), Effects.parse(["asymmetric_restitution=0.88,0.2"]),
                    settle=10.0)
     lab = label_simulation(res)
-    assert lab.label == "multi_ipc" and lab.ipc > 3
+    # per cycle one right impact and, on the left, an impact, a return 0.156 T later, a
+    # return 0.038 T after that (chatter: RETURN_TAU) and its height-chatter tail
+    assert lab.label == "multi_ipc" and lab.ipc == pytest.approx(3.0, abs=0.05)
+    assert labels.same_wall_returns(res.record_impacts().t, res.record_impacts().side,
+                                    res.params.period).sum() > 1.5 * lab.n_cycles
 
 
 def test_a_bounce_that_barely_leaves_the_wall_is_chatter_of_the_impact():
@@ -135,9 +141,58 @@ def test_a_bounce_that_barely_leaves_the_wall_is_chatter_of_the_impact():
     lab = label_simulation(res)
     assert lab.label == "1ipc" and lab.ipc == pytest.approx(1.0, abs=0.05)
     assert (labels.chatter_mask(res, imp, share=1e-4) == chatter).all()
-    assert labels.chatter_mask(res, imp, share=1e-5).sum() <= 2
+    assert labels.chatter_mask(res, imp, share=1e-5, tau=0).sum() <= 2
+    # each bounce also comes back 0.026-0.034 T after the impact: the time rule alone
+    # (RETURN_TAU) finds the same chatter
+    assert (labels.chatter_mask(res, imp, share=0) == chatter).all()
     try:
         labels.CHATTER_SHARE, kept = 0.0, labels.CHATTER_SHARE
+        labels.RETURN_TAU, kept_tau = 0.0, labels.RETURN_TAU
         assert label_simulation(res).label == "multi_ipc"
     finally:
-        labels.CHATTER_SHARE = kept
+        labels.CHATTER_SHARE, labels.RETURN_TAU = kept, kept_tau
+
+
+class _Impacts:
+    def __init__(self, t, side):
+        self.t, self.side = np.asarray(t, float), np.asarray(side)
+        self.t_out = self.t + 1e-4
+        self.n = self.t.size
+
+
+def _fake_run(lag):
+    """A record (40 cycles of T) with a right impact per cycle and a second right impact
+    ``lag`` periods after it; between impacts the ball stays mid-clearance (z = 0), far
+    above the height rule (CHATTER_SHARE); the LO a pure sine (periodic)."""
+    from types import SimpleNamespace
+
+    t = np.sort(np.r_[np.arange(N_CYC) * T + 0.2 * T, np.arange(N_CYC) * T + (0.2 + lag) * T])
+
+    def evaluate(ts):
+        ts = np.asarray(ts, float)
+        w = 2 * np.pi / T
+        return {"x": 5e-3 * np.sin(w * ts), "xd": 5e-3 * w * np.cos(w * ts),
+                "z": np.zeros(ts.size)}
+
+    imp = _Impacts(t, np.ones(t.size, int))
+    return SimpleNamespace(params=SimpleNamespace(period=T, b=0.01), settle=0.0,
+                           duration=N_CYC * T, evaluate=evaluate,
+                           record_impacts=lambda: imp), imp
+
+
+def test_a_same_wall_return_within_return_tau_is_chatter_however_high():
+    """A return to the same wall 0.05 T after an impact is chatter of it (RETURN_TAU,
+    0.06: what a recording resolves, unlike the height rule's microns), one 0.07 T after
+    it an impact of its own; the ball got 0.5 of the clearance off the wall in both."""
+    from vidiscover.regimes import labels
+
+    assert labels.RETURN_TAU == 0.06
+    res, imp = _fake_run(0.05)
+    assert labels.chatter_mask(res, imp, tau=0).sum() == 0          # not by height
+    assert (labels.chatter_mask(res, imp) == np.tile([False, True], N_CYC)).all()
+    lab = label_simulation(res)
+    assert lab.label == "1ipc" and lab.ipc == 1.0
+    res, imp = _fake_run(0.07)
+    assert labels.chatter_mask(res, imp).sum() == 0
+    lab = label_simulation(res)
+    assert lab.label == "multi_ipc" and lab.ipc == 2.0

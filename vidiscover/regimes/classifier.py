@@ -245,6 +245,13 @@ class RuleBaseline:
     :func:`~vidiscover.regimes.labels.impacts_repeat`).
     Everything else is ``chaotic``.
 
+    The impacts counted are those the labels count: the rules read the *merged*
+    features (:data:`MERGED`, :data:`~vidiscover.regimes.features.MERGED_FEATURES`:
+    a detection on the same wall less than
+    :data:`~vidiscover.regimes.labels.RETURN_TAU` periods after the one before is part
+    of that impact) in place of the plain ones named above; of a table without a
+    merged column (computed before they existed), the plain one.
+
     Parameters
     ----------
     periodic_tol : float
@@ -260,15 +267,25 @@ class RuleBaseline:
         "impacts_per_cycle", "impacting_cycle_share", "envelope_modulation",
         "strobe_period_error", "one_per_cycle_share", "two_per_cycle_share", "alternation",
         "asymmetry", "impact_period_error", "strong_two_share", "strong_alternation",
-        "strobe_state_error")
+        "strobe_state_error", "merged_per_cycle", "merged_cycle_share", "merged_one_share",
+        "merged_two_share", "merged_alternation", "merged_asymmetry")
+    #: The merged feature the rules read in place of a plain one (when the table has it).
+    MERGED: ClassVar[dict[str, str]] = {
+        "impacts_per_cycle": "merged_per_cycle", "impacting_cycle_share": "merged_cycle_share",
+        "one_per_cycle_share": "merged_one_share", "two_per_cycle_share": "merged_two_share",
+        "alternation": "merged_alternation", "asymmetry": "merged_asymmetry"}
 
     def predict(self, features: pd.DataFrame) -> np.ndarray:
         """Label every row of a DataFrame of features (columns named as in ALL_FEATURES).
 
-        A missing column is NaN, which no rule reads as met.
+        A missing column is NaN, which no rule reads as met; a missing merged column
+        (:data:`MERGED`) is its plain one.
         """
         f = {k: (features[k].to_numpy(float) if k in features
                  else np.full(len(features), np.nan)) for k in self.FEATURES}
+        for plain, merged in self.MERGED.items():
+            if merged in features:
+                f[plain] = f[merged]
         with np.errstate(invalid="ignore"):
             ipc = np.nan_to_num(f["impacts_per_cycle"])
             phi = np.nan_to_num(f["impacting_cycle_share"])
@@ -392,7 +409,7 @@ class RegimeModel:
                        else np.full(len(features), np.nan))
         x = [cols[n] for n in self.feature_names]
         if self.rule_inputs:
-            rule = RuleBaseline().predict(pd.DataFrame({n: cols[n] for n in RuleBaseline.FEATURES}))
+            rule = RuleBaseline().predict(_rule_frame(features))
             x += [(rule == lab).astype(float) for lab in LABELS]
         return np.column_stack(x) if x else np.zeros((len(features), 0))
 
@@ -566,11 +583,14 @@ def _rule_frame(features) -> pd.DataFrame:
     if not isinstance(features, pd.DataFrame):
         features = pd.DataFrame(list(features))
     cols = {}
+    merged = set(RuleBaseline.MERGED.values())
     for n in RuleBaseline.FEATURES:
         key = n if n in features else f"feature:{n}"
-        cols[n] = (features[key].to_numpy(float) if key in features
-                   else np.full(len(features), np.nan))
-    return pd.DataFrame(cols)
+        if key in features:
+            cols[n] = features[key].to_numpy(float)
+        elif n not in merged:                # the rules read the plain one without it
+            cols[n] = np.full(len(features), np.nan)
+    return pd.DataFrame(cols, index=range(len(features)))
 
 
 #: The rules' label when no rule holds: never kept over the classifier

@@ -25,7 +25,15 @@ float, NaN when undefined for the record.
   (|dv| >= :data:`STRONG_SHARE` of their wall's 90th percentile): ``strong_per_cycle``,
   ``strong_one_share``, ``strong_two_share``, ``strong_alternation``, ``weak_share``,
   and the repetition of their sequence after p <= 4 cycles, ``impact_period_error``
-  (timing, in periods) and ``impact_dv_error`` (relative |dv|).
+  (timing, in periods) and ``impact_dv_error`` (relative |dv|);
+* in :data:`MERGED_FEATURES` (part of :data:`ALL_FEATURES`), the impacts as the labels
+  count them: consecutive detections on the same wall less than
+  :data:`~vidiscover.regimes.labels.RETURN_TAU` periods apart are one impact, the first
+  (:func:`merged_impacts`): ``merged_per_cycle``, ``merged_cycle_share``,
+  ``merged_one_share``, ``merged_two_share``, ``merged_alternation`` and
+  ``merged_asymmetry``, the analysis's ``impacts_per_cycle``,
+  ``impacting_cycle_share``, ``two_per_cycle_share``, ``alternation``, ``asymmetry``
+  and ``one_per_cycle_share`` of the merged impacts (what the rule baseline reads).
 
 Examples
 --------
@@ -41,9 +49,10 @@ import math
 import numpy as np
 
 from ..analysis.returnmap import ANALYSIS_FEATURES, FeatureContext, FeatureSet, cycle_counts
+from .labels import same_wall_returns
 
 __all__ = ["REGIME_FEATURES", "ALL_FEATURES", "STATE_FEATURES", "IMPACT_FEATURES",
-           "cycle_waveforms"]
+           "MERGED_FEATURES", "cycle_waveforms", "merged_impacts"]
 
 _NAN = float("nan")
 #: Samples per cycle of the resampled LO waveform.
@@ -462,6 +471,87 @@ def _repeat_error(ctx: FeatureContext, wall) -> float:
     return best
 
 
+def merged_impacts(ctx: FeatureContext) -> np.ndarray:
+    """Mask of the detections that are impacts as the labels count them (once per context).
+
+    A detection on the same wall as the one before it and less than
+    :data:`~vidiscover.regimes.labels.RETURN_TAU` periods after it is merged into it
+    (:func:`~vidiscover.regimes.labels.same_wall_returns`, the labels' rule): a ball's
+    first rebound off a wall it rests against, seen as a pulse 0.035-0.05 T after the
+    impact at 0.1-0.3 of its dv, is chatter to the labels however high it bounced
+    (diag19b: paper-rig 21001 #25, floor 31337 #133 and #351, 1ipc read as multi_ipc).
+    """
+    return ctx.memo("merged", _merged_of)
+
+
+def _merged_of(ctx: FeatureContext) -> np.ndarray:
+    keep = ~same_wall_returns(ctx.t, ctx.side, ctx.period)
+    keep.flags.writeable = False
+    return keep
+
+
+def _merged_counts(ctx: FeatureContext) -> np.ndarray:
+    """Merged impacts per complete cycle (once per context)."""
+    return ctx.memo("merged_counts", lambda c: cycle_counts(
+        np.asarray(c.t, float)[merged_impacts(c)], c.cycles()))
+
+
+def _merged_ipc(ctx: FeatureContext) -> float:
+    """Mean merged impacts (:func:`merged_impacts`) per complete cycle."""
+    c = _merged_counts(ctx)
+    return float(c.mean()) if c.size else _NAN
+
+
+def _merged_phi(ctx: FeatureContext) -> float:
+    """Share of complete cycles with at least one merged impact."""
+    c = _merged_counts(ctx)
+    return float((c >= 1).mean()) if c.size else _NAN
+
+
+def _merged_share1(ctx: FeatureContext) -> float:
+    """Share of complete cycles with exactly one merged impact."""
+    c = _merged_counts(ctx)
+    return float((c == 1).mean()) if c.size else _NAN
+
+
+def _merged_share2(ctx: FeatureContext) -> float:
+    """Share of complete cycles with exactly two merged impacts."""
+    c = _merged_counts(ctx)
+    return float((c == 2).mean()) if c.size else _NAN
+
+
+def _merged_alternation(ctx: FeatureContext) -> float:
+    """Share of consecutive merged impacts on opposite walls."""
+    s = ctx.side[merged_impacts(ctx)]
+    return float((s[1:] != s[:-1]).mean()) if s.size >= 2 else _NAN
+
+
+def _merged_asymmetry(ctx: FeatureContext) -> float:
+    """``asymmetry`` of the merged impacts: |mean dt after right - after left| / T."""
+    m = merged_impacts(ctx)
+    t, s = np.asarray(ctx.t, float)[m], ctx.side[m]
+    if t.size < 3:
+        return _NAN
+    dt = np.diff(t)
+    alt = s[1:] != s[:-1]
+    ar, al = dt[alt & (s[:-1] == "right")], dt[alt & (s[:-1] == "left")]
+    if not (ar.size and al.size):
+        return _NAN
+    return float(abs(ar.mean() - al.mean()) / ctx.period)
+
+
+#: The cycle and side features of the impacts as the labels count them
+#: (:func:`merged_impacts`), part of :data:`ALL_FEATURES`; the rule baseline reads them.
+MERGED_FEATURES = FeatureSet({
+    "merged_per_cycle": _merged_ipc,
+    "merged_cycle_share": _merged_phi,
+    "merged_one_share": _merged_share1,
+    "merged_two_share": _merged_share2,
+    "merged_alternation": _merged_alternation,
+    "merged_asymmetry": _merged_asymmetry,
+})
+
+
 #: Features of the strong impacts (:data:`STRONG_SHARE`) and of the repetition of the
 #: impact sequence, part of :data:`ALL_FEATURES`.
 IMPACT_FEATURES = FeatureSet({
@@ -506,4 +596,5 @@ STATE_FEATURES = FeatureSet({"strobe_state_error": _strobe_state})
 #: The analysis's own features, the regime features and the state's periodicity: the
 #: set the classifier, sweeps and the ``analyze`` command compute
 #: (``analyze(rec, features=ALL_FEATURES)``).
-ALL_FEATURES = ANALYSIS_FEATURES | REGIME_FEATURES | STATE_FEATURES | IMPACT_FEATURES
+ALL_FEATURES = (ANALYSIS_FEATURES | REGIME_FEATURES | STATE_FEATURES | IMPACT_FEATURES
+                | MERGED_FEATURES)
