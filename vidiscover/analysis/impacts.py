@@ -44,6 +44,16 @@ given. The filter's ringing is part of that shape, so it is fitted, not counted.
    error of a stronger one at its lag (:attr:`.pulse.PulseResponse.error_env`:
    ringing the model lacks); the neighbours are refitted. A pulse whose fit leaves a
    residual above 3 times noise plus model error is flagged ``merged``.
+7. *Weak pulses at one phase of the forcing cycle.* When the record holds at most one
+   pulse per forcing cycle (period from the fit of ``xe``, :func:`.signals.fit_forcing`),
+   the residual's matched filter is stacked over the cycles (per phase, its largest
+   value within 1 ms, for the impacts' jitter, summed over cycles, and a small period
+   error searched); a phase whose sum stands out (score 8 against its spread over all
+   phases) and that the detections leave empty in more than a tenth of the cycles is
+   read cycle by cycle at a matched-filter SNR of 2 within a window about the cycles'
+   phase. A grazing one-impact-per-cycle motion's impacts (per-impact SNR 2-5) are
+   found so; the mean of the added pulses must have the pulse's shape (a step of the
+   forced response at one phase, a friction reversal, has flanks). Said in a warning.
 
 Clipping: a run of at most :data:`_MAX_CLIP_RUN` samples on one rail (a jump to the
 other rail ends a run) is a pulse too strong to read; runs within the kernel span of
@@ -88,6 +98,7 @@ from .signals import (
     check_recording,
     clipped_mask,
     fill_gaps,
+    fit_forcing,
     good_sample,
     max5,
     noise_sigma,
@@ -130,6 +141,7 @@ _RINGING_MARGIN = 1.5      # a pulse must exceed this x the learned model error 
 _WIDTHS = (1.0, 2.0, 3.0, 4.5, 6.0)   # longer contacts a learned model's pulse may have (samples)
 _WIDE_MIN = 25.0           # a longer contact must explain this many noise variances more ...
 _WIDE_SHARE = 0.5          # ... and this share of the residual beyond noise of the model's fit
+_MF_HALF = 4               # half-length of the matched filter's taps (samples)
 _WILD = 2.0                # a fitted peak beyond this x the data's in its window diverged
 
 
@@ -143,7 +155,7 @@ def _templates(model: PulseModel, fs: float, L: int):
     Q = np.linalg.qr(basis)[0]                                       # (G, W, 3)
     Qm = np.ascontiguousarray(Q.transpose(1, 0, 2).reshape(j.size, -1))   # (W, 3 G)
     # matched filter taps at 0 and 1/2 sample, unit norm
-    m = 4
+    m = _MF_HALF
     jm = np.arange(-m, m + 1, dtype=float)
     mf = [model.kernel(jm - d, fs) for d in (0.0, 0.5)]
     mf = [k / np.linalg.norm(k) for k in mf]
@@ -664,6 +676,48 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
             warnings.append(f"{n_wake} weak pulse(s) dropped: they fit worse than the pulse "
                             "model allows in the wake of a clipped impact, whose ringing "
                             "cannot be read")
+    cycles = n / fs * float(rec.meta.frequency)
+    if fit.sat is None and _PHASE_MIN_CYCLES + 1 <= cycles and fit.n <= cycles - 1:
+        # at most one pulse per forcing cycle: weak pulses at a repeating phase (a
+        # grazing one-impact-per-cycle motion) are looked for in the stacked cycles
+        forcing = fit_forcing(rec.t, rec.xe, rec.meta.frequency)
+        if forcing.source == "xe":
+            if fit.n != n_start:
+                del smooth
+                smooth = smooth_part()
+                n_start = fit.n
+            r = smooth - base
+            r[bad] = 0.0
+            reach = hw + _MF_HALF
+            found, sign = _phase_pulses(fit, r, sigma, fs, forcing.period, reach)
+            del r
+            if found.size:
+                before = fit.pos, fit.amp, fit.wid
+                fit.add(found)
+                fit.backfit(base, iterations=1)
+                for last in (False, True):
+                    # the added pulses keep their sign and SNR when refitted (the
+                    # neighbours of a dropped one refitted once)
+                    mine = _nearest(fit.pos, found) < _nearest(fit.pos, before[0])
+                    ok = ~mine | ((np.sign(fit.amp) == sign)
+                                  & (fit.snr(sigma) > 0.8 * _PHASE_CONFIRM))
+                    if ok.all():
+                        break
+                    fit.keep(ok)
+                    if not last:
+                        fit.backfit(base, iterations=1)
+                n_phase = fit.n - before[0].size
+                if n_phase > 0:
+                    del smooth
+                    smooth = smooth_part()
+                    n_start = fit.n
+                    resid = smooth - base
+                    resid[bad] = 0.0
+                    warnings.append(f"{n_phase} weak pulse(s) below the threshold found at one "
+                                    "phase of the forcing cycle, repeating over the cycles "
+                                    "(their sum over the cycles is above it)")
+                else:
+                    fit.pos, fit.amp, fit.wid = before
     if fit.n != n_start:
         del smooth
         smooth = smooth_part()
@@ -737,6 +791,180 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
                            a_smooth=a_smooth, baseline=base, bad=bad,
                            n_clipped=int(clip.sum()), n_dropout=int(nan.sum()),
                            pulse=pulse, response=response, warnings=tuple(warnings))
+
+
+def _nearest(p: np.ndarray, ref: np.ndarray) -> np.ndarray:
+    """Distance from each of ``p`` to the nearest of ``ref`` (inf when ``ref`` is empty)."""
+    if ref.size == 0:
+        return np.full(p.size, np.inf)
+    ref = np.sort(ref)
+    i = np.searchsorted(ref, p)
+    lo = ref[np.clip(i - 1, 0, ref.size - 1)]
+    hi = ref[np.clip(i, 0, ref.size - 1)]
+    return np.minimum(np.abs(p - lo), np.abs(p - hi))
+
+
+def _running_max(v: np.ndarray, half: int) -> np.ndarray:
+    """max(v[i - half : i + half + 1]) for every i (the window cut at the ends)."""
+    w, n = 2 * half + 1, v.size
+    r = np.concatenate([np.full(half, -np.inf), v, np.full(half, -np.inf)])
+    k = 1
+    while 2 * k <= w:                   # r[i] = max of k samples from i, k doubling
+        np.maximum(r[:-k], r[k:], out=r[:-k])
+        k *= 2
+    return np.maximum(r[:n], r[w - k:w - k + n])
+
+
+_PHASE_MIN_CYCLES = 8     # forcing cycles a phase-coherent search needs
+_PHASE_BLOCK = 4          # cycles summed at the fitted period before the drift search
+_PHASE_DRIFT = 3e-4       # relative error of the fitted forcing period searched (+/-)
+_PHASE_JITTER = 1e-3      # (s) an impact's time about the cycles' common phase
+_PHASE_FOUND = 0.9        # share of cycles with a detection at the phase that ends the search
+_PHASE_STACK = 8.0        # stacked score a phase needs (noise: up to 6.1 on 470 paper-rig rows)
+_PHASE_CONFIRM = 2.0      # matched-filter SNR a pulse at the stacked phase needs per cycle
+_PHASE_SURE = 3.5         # ... and to set the cycles' phase and the window's width
+_PHASE_LOCAL = 5          # cycles either side whose sure pulses set a cycle's phase
+_PHASE_SHAPE = 0.4        # misfit of the mean confirmed pulse about its peak (share of peak^2)
+
+
+def _phase_pulses(fit: _Fitter, resid: np.ndarray, sigma: float, fs: float, period: float,
+                  reach: int) -> tuple[np.ndarray, int]:
+    """Weak pulses at one phase of the forcing cycle, found by stacking the cycles.
+
+    A grazing one-impact-per-cycle motion hits the wall once per forcing cycle at a
+    repeating phase (within about :data:`_PHASE_JITTER`), with pulses too weak
+    (per-impact SNR 2-5) for the threshold. Per cycle and phase, the largest
+    matched-filter output of one sign within the jitter is taken from the residual
+    ``resid`` (fitted pulses taken out, the samples within ``reach`` of them left
+    out); these are summed over the cycles (blocks of :data:`_PHASE_BLOCK` cycles at
+    the fitted forcing period, the blocks shifted for a period error up to
+    :data:`_PHASE_DRIFT`: the fit of ``xe`` is good to about 2e-4) and scored against
+    their own spread over all phases (most phases hold no pulse). A phase scoring
+    above :data:`_PHASE_STACK` where fewer than :data:`_PHASE_FOUND` of the cycles hold a
+    detection of that sign is confirmed cycle by cycle: the matched filter of that
+    sign above :data:`_PHASE_CONFIRM` within the jitter of the expected position, with
+    no fitted pulse within ``reach``; their mean must have the pulse's shape
+    (:data:`_PHASE_SHAPE`).
+
+    Returns
+    -------
+    (positions, sign)
+        Sample positions of the confirmed pulses (empty if none) and their sign.
+    """
+    none = np.zeros(0), 0
+    n = resid.size
+    P = period * fs
+    J = max(1, int(round(_PHASE_JITTER * fs)))
+    if not (math.isfinite(P) and P > 4 * (reach + J)):
+        return none
+    span = int(math.ceil(P))
+    smax = int(math.ceil(n * _PHASE_DRIFT)) + 1
+    g = J + smax + _MF_HALF
+    K = int((n - 2 * g - span) // P) + 1 if n > 2 * g + span else 0
+    if K < _PHASE_MIN_CYCLES:
+        return none
+    c = np.rint(np.arange(K) * P).astype(np.int64) + g           # cycle starts
+    keep = np.ones(n, dtype=bool)
+    if fit.n:
+        j = np.rint(fit.pos).astype(np.int64)[:, None] + np.arange(-reach, reach + 1)[None, :]
+        keep[np.clip(j, 0, n - 1).ravel()] = False
+    cols = np.arange(-smax, span + smax)          # phases, with the drift shifts' margin
+    idx = c[:, None] + cols[None, :]                                # (K, span + 2 smax)
+    valid = keep[idx].astype(float)
+    nb = -(-K // _PHASE_BLOCK)
+    kc = np.minimum(np.arange(nb) * _PHASE_BLOCK + (_PHASE_BLOCK - 1) / 2.0, K - 1)
+    step = 2.0 / (K * P)                          # two samples of drift over the record
+    drifts = np.arange(-_PHASE_DRIFT, _PHASE_DRIFT + 0.5 * step, step)
+    shifts = np.rint(drifts[:, None] * kc[None, :] * P).astype(np.int64)      # (E, B)
+    taps = [fit.tpl[s][3] for s in ((0, 1) if fit.two else (0,))]
+    pad = nb * _PHASE_BLOCK - K
+
+    def stacked(m):
+        # per drift, the blocks' sums shifted by it and summed: (E, span)
+        mb = np.vstack([m, np.zeros((pad, m.shape[1]))]).reshape(
+            nb, _PHASE_BLOCK, -1).sum(axis=1)
+        out = np.zeros((drifts.size, span))
+        for e in range(drifts.size):
+            for b in range(nb):
+                lo = smax + shifts[e, b]
+                out[e] += mb[b, lo:lo + span]
+        return out
+
+    cnt = stacked(valid)
+    best = (0.0, 0, 0, 0)
+    for s, tap in enumerate(taps):
+        z = np.correlate(resid, tap[0], mode="same")
+        z /= sigma
+        for sg in ((1, -1) if not fit.two else ((1,) if s == 0 else (-1,))):
+            m = _running_max(z if sg > 0 else -z, J)[idx]
+            mv = m[valid > 0]
+            if mv.size < 10 * span:
+                return none
+            mu, sd = float(mv.mean()), float(mv.std())
+            if not sd > 0:
+                return none
+            m -= mu
+            m *= valid
+            S = stacked(m)
+            Z = np.where(cnt >= _PHASE_MIN_CYCLES, S / (sd * np.sqrt(np.maximum(cnt, 1.0))),
+                         0.0)
+            k = int(np.argmax(Z))
+            if Z.flat[k] > best[0]:
+                best = (float(Z.flat[k]), sg, *np.unravel_index(k, Z.shape))
+    val, sg, e, q = best
+    if val <= _PHASE_STACK:
+        return none
+    # each cycle's expected position; the detections of that sign already there
+    x = c + q + np.arange(K) * P * drifts[e]
+    found = _nearest(x, fit.pos[np.sign(fit.amp) == sg]) <= J + 1
+    if found.mean() >= _PHASE_FOUND:
+        return none
+    ks = np.flatnonzero(_nearest(x, fit.pos) > reach)
+    if ks.size == 0:
+        return none
+    tap = taps[0 if (sg > 0 or not fit.two) else 1]
+    h = tap[0].size // 2
+
+    def best_in(centre, half):
+        jj = np.rint(centre).astype(np.int64)[:, None] + np.arange(-half, half + 1)[None, :]
+        win = np.clip(jj[:, :, None] + np.arange(-h, h + 1)[None, None, :], 0, n - 1)
+        seg = resid[win]
+        zz = np.maximum(sg * (seg @ tap[0]), sg * (seg @ tap[1])) / sigma
+        k = np.argmax(zz, axis=1)
+        r = np.arange(k.size)
+        return jj[r, k], zz[r, k]
+
+    # the pulses strong enough to be sure of give each cycle's phase (their running
+    # median over the neighbouring cycles) and its spread, which narrows the window
+    pos, z = best_in(x[ks], J)
+    sure = z > _PHASE_SURE
+    half = J
+    if sure.sum() >= _PHASE_MIN_CYCLES // 2:
+        dk = np.abs(ks[:, None] - ks[sure][None, :]) <= _PHASE_LOCAL
+        off = np.where(dk, (pos - x[ks])[sure][None, :], np.nan)
+        has = dk.any(axis=1)
+        shift = np.where(has, np.nanmedian(np.where(has[:, None], off, 0.0), axis=1),
+                         float(np.median((pos - x[ks])[sure])))
+        spread = (pos - x[ks] - shift)[sure]
+        half = int(min(J, max(1, math.ceil(3.0 * 1.4826 * np.median(np.abs(spread))))))
+        pos, z = best_in(x[ks] + shift, half)
+    pos = pos[z > _PHASE_CONFIRM]
+    if pos.size == 0:
+        return none
+    # the mean of the confirmed pulses (in noise units times sqrt(count)) must be the
+    # pulse about its peak: a step of the forced response (a friction reversal of the
+    # ball, every cycle at one phase) passes the matched filter but leaves flanks
+    L = 3 * _MF_HALF
+    kern = np.zeros(2 * L + 1)
+    kern[L - h:L + h + 1] = tap[0]
+    mean = sg * resid[np.clip(pos[:, None] + np.arange(-L, L + 1)[None, :], 0, n - 1)].sum(
+        axis=0) / (sigma * math.sqrt(pos.size))
+    flank = np.abs(np.arange(-L, L + 1)) >= 2
+    miss = mean - (mean @ kern) * kern
+    excess = float((miss[flank] ** 2).sum()) - flank.sum()
+    if excess > _PHASE_SHAPE * mean[L] ** 2:
+        return none
+    return pos.astype(float), sg
 
 
 def _without_smooth_extrema(a: np.ndarray, clip: np.ndarray, nan: np.ndarray, fs: float,
