@@ -76,3 +76,13 @@ def test_no_search_without_a_base_sine():
     rec, _ = _record(0, snr=4.0)
     flat = Recording(rec.t, rec.x, rec.a, np.zeros(rec.n), rec.meta)
     assert detect_impacts(flat, pulse=PulseModel()).n <= 1
+
+
+def test_the_search_can_be_turned_off():
+    from vidiscover.analysis import DetectionOptions
+
+    rec, _ = _record(0, snr=4.0)
+    assert detect_impacts(rec, pulse=PulseModel()).n >= 36
+    off = detect_impacts(rec, pulse=PulseModel(), options=DetectionOptions(phase_search=False))
+    assert off.n <= 1
+    assert not any("phase of the forcing cycle" in w for w in off.warnings)

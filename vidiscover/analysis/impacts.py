@@ -295,6 +295,12 @@ class DetectionOptions:
         For a given :class:`PulseModel`: when the strong pulses are wider than it
         (chi-square of their fit above 1.5), refit with a contact duration ``tau``
         chosen among 0.5-8 samples (the :attr:`ImpactDetection.pulse` then holds it).
+    phase_search : bool
+        Look for weak pulses at one repeating phase of the forcing cycle, below the
+        threshold one by one but above it summed over the cycles (a grazing
+        one-impact-per-cycle motion; see the module notes, step 7). Runs only on
+        records with at most one detection per cycle and a sinusoidal base signal;
+        what it adds is said in ``warnings``. False: the threshold alone.
 
     Raises
     ------
@@ -315,6 +321,7 @@ class DetectionOptions:
     a_range: float | None = None
     max_ball_speed: float = 5.0
     fit_width: bool = True
+    phase_search: bool = True
 
     def __post_init__(self) -> None:
         def bad(name, what):
@@ -677,7 +684,8 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
                             "model allows in the wake of a clipped impact, whose ringing "
                             "cannot be read")
     cycles = n / fs * float(rec.meta.frequency)
-    if fit.sat is None and _PHASE_MIN_CYCLES + 1 <= cycles and fit.n <= cycles - 1:
+    if (options.phase_search and fit.sat is None and _PHASE_MIN_CYCLES + 1 <= cycles
+            and fit.n <= cycles - 1):
         # at most one pulse per forcing cycle: weak pulses at a repeating phase (a
         # grazing one-impact-per-cycle motion) are looked for in the stacked cycles
         forcing = fit_forcing(rec.t, rec.xe, rec.meta.frequency)
