@@ -101,8 +101,10 @@ def run_discover(paths, out: Path, *, mu: float = 0.0, meta: Path | None = None,
         Bad options, unreadable recordings or metadata, an output path that is a
         file. Nothing is written then.
     """
-    from .._workers import gc_paused
+    from .._workers import gc_paused, short_blas_spin
 
+    if _OWN_PROCESS[0]:        # before numpy loads OpenBLAS: its idle threads sleep
+        short_blas_spin()
     with gc_paused():      # not while the stack is imported (8 % less CPU)
         import pandas as pd
 
