@@ -1,0 +1,36 @@
+"""``discover`` loads what an analysis imports before its analysts fork.
+
+An import left to the first analysis is paid again in every forked analyst, on cores
+the other analyses need (scipy.ndimage, about 35 ms of CPU in each of three).
+"""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+
+from vidiscover import Effects, preset, record, simulate
+from vidiscover.io import write_recording
+
+_RUN = """
+import sys
+from vidiscover.io import read_recording
+from vidiscover.discovery.pipeline import _analysis_imports, _analysis_task
+rec = read_recording(sys.argv[1])
+_analysis_imports()
+before = set(sys.modules)
+_analysis_task((rec, 0.0, None, None))
+print(" ".join(sorted(set(sys.modules) - before)))
+"""
+
+
+def test_an_analysis_imports_nothing_after_the_analysis_imports(tmp_path):
+    sim = simulate(preset("paper", b=0.0075),
+                   Effects.parse(["velocity_dependent_restitution=right=linear:0.95:0.12,"
+                                  "left=power:0.9:0.2"]), settle=5.0, duration=2.0)
+    rec, truth = record(sim, seed=1)
+    path = tmp_path / "rec.csv"
+    write_recording(rec, path, truth=truth)
+    out = subprocess.run([sys.executable, "-c", _RUN, str(path)], capture_output=True,
+                         text=True, check=True)
+    assert out.stdout.split() == []
