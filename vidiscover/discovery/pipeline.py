@@ -497,8 +497,9 @@ def discover(recordings, *, mu: float = 0.0, seed: int = 0, n_boot: int = 200,
     # long as half an analysis): with a worker per analysis, the analyses and the load
     # share the cores to the end, where this process would otherwise take an analysis
     # after the load and run it alone while the workers wait (3 recordings on 2 cores:
-    # 1.75 -> 1.5 s of wall)
-    width = len(todo) + (len(todo) > 1 and not _fitting_loaded())
+    # 1.75 -> 1.5 s of wall); one recording too: its analyst runs while this process
+    # loads them, instead of the analysis after the load
+    width = len(todo) + (len(todo) >= 1 and not _fitting_loaded())
     bar = None
     try:
         with _workers_for(n_jobs, width, fitting=False) as analysts:   # forks here
