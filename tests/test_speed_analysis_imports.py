@@ -1,4 +1,4 @@
-"""``discover`` loads what an analysis imports before its analysts fork.
+"""``discover``'s workers: imports loaded before the fork, the law workers' priority.
 
 An import left to the first analysis is paid again in every forked analyst, on cores
 the other analyses need (scipy.ndimage, about 35 ms of CPU in each of three).
@@ -34,3 +34,20 @@ def test_an_analysis_imports_nothing_after_the_analysis_imports(tmp_path):
     out = subprocess.run([sys.executable, "-c", _RUN, str(path)], capture_output=True,
                          text=True, check=True)
     assert out.stdout.split() == []
+
+
+def test_law_workers_run_below_this_process_and_analysts_do_not():
+    import os
+
+    from vidiscover._workers import can_fork
+    from vidiscover.discovery.pipeline import LAW_WORKER_NICE, _workers_for
+
+    if not can_fork():
+        return
+    here = os.nice(0)
+    for fitting, added in ((True, LAW_WORKER_NICE), (False, 0)):
+        with _workers_for(2, 2, fitting=fitting) as run:
+            assert run.forked
+            run.ready[0].result()
+            seen = run.submit(os.nice, 0).result()
+        assert seen == min(here + added, 19)
