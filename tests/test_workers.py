@@ -72,6 +72,25 @@ def test_first_runs_here_once_while_the_workers_take_the_tasks(tmp_path):
     assert all(os.path.exists(m) for m in marks)
 
 
+@forking
+def test_a_single_task_goes_to_a_worker_while_first_runs_here(tmp_path):
+    """One task (discover on one recording) runs beside ``first`` (the fitting
+    libraries' load), not after it in this process."""
+    mark = str(tmp_path / "0")
+    seen = []
+
+    def first():
+        deadline = time.monotonic() + 10.0
+        while not os.path.exists(mark) and time.monotonic() < deadline:
+            time.sleep(0.005)
+        seen.append(os.path.exists(mark))
+
+    with WorkerPool(1) as pool:
+        here = pool.map(_touch, [mark], first=first)
+    assert seen == [True]
+    assert here == [False]
+
+
 def test_first_runs_once_also_without_workers():
     calls = []
     with WorkerPool(0) as pool:

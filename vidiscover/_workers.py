@@ -263,7 +263,8 @@ class WorkerPool:
                 with lock:
                     bar.update(1)
 
-        if self.executor is None or len(items) <= 1:
+        # one task goes to a worker only while this process runs ``first``
+        if self.executor is None or (len(items) <= 1 and first is None) or not items:
             if first is not None:
                 first()
             for i, item in enumerate(items):
