@@ -223,6 +223,12 @@ _TAU_SCALE = 0.3
 #: more fits within tolerance (identified or not: test 21 -> 25 of 60, dev 7 -> 10 of 24,
 #: holdout7 20 -> 25) but identifies no more (test 3/0 -> 3/0: 054 won, 020 lost to
 #: a sparse step drifting to z'|z'|) unless the placement test is eased (see _TAU_SCALE).
+#: Do not make "free" the default: one free depth per recording acts like a free
+#: clearance, which trades against friction and tilt. On spent holdout9 it identified two
+#: wrong laws with small standard errors that "learned" refuses (holdout9-040: theta 0.97
+#: for 1.31 deg; -052: mu 0.126 for 0.289), with or without the placement test, and a
+#: placement test that moves only the impact times separates right from wrong no better
+#: (test/dev/holdout6-8: 17 identified, 17 within, either way; flight19).
 _PENETRATION = "learned"
 _AMBIGUOUS = (0.02, 0.2)    # fixed points further apart than this (mu, deg) are rivals
 _COLLINEAR = 0.99           # cosine above which mu and theta are confounded
