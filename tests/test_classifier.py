@@ -637,20 +637,18 @@ def test_probe_rows_leave_out_rows_that_move_under_a_one_ulp_nudge(monkeypatch):
 
 
 #: The issue's targets are 0.95 and every recall >= 0.9, every label (none exempt).
-#: Measured on this set with the shipped model of this stop (the gate of bfbbad6-d5715fd:
-#: the rules keep a label unless the classifier beats them by more than 2 standard errors;
-#: rule labels 1ipc, 2ipc_sym, 2ipc_asym, multi_ipc, smr): ``classify`` 0.9331 (369 cases;
-#: the rules alone 0.9246, the classifier alone 0.9551), every label >= 0.978 but ``1ipc``,
-#: 9 of 16 (0.5625): grazing one-impact-per-cycle rigs whose impacts the detector cannot
-#: see (LO velocity jumps of 2-3.5e-6 m/s, pulses about a third of the noise), 3 of which
-#: the rules now call ``multi_ipc`` (their first bounces seen). The model before (e634b4a,
-#: rule labels 1ipc and smr) read 0.9502 here (1ipc 12 of 16) but gave ``2ipc_sym`` to the
-#: classifier on 1-2 out-of-fold wins; on four other tuning sets (22101, 22103: paper rig
-#: and other rigs) the new gate reads 0.959-0.982 against 0.954-0.984 (other rigs 22103:
-#: 2ipc_sym 0.83 -> 1.0). The floors guard what is achieved (a regression fails); the
-#: ``1ipc`` and balanced misses are reported in the README and the notes.
-RECALL_FLOOR = {lab: 0.9 for lab in LABELS} | {"1ipc": 0.55}
-BALANCED_FLOOR = 0.93
+#: Measured on this set with the shipped model of this stop (retrained at 96fb4f6: the
+#: labels' and the rules' 0.06 T same-wall return (52a5673), the phase-coherent search for
+#: weak impacts at one phase of the cycle (96fb4f6), the reconstruction's end and centroid
+#: fixes (f498083, 2aba00d)): ``classify`` 0.9706 (369 cases; the rules alone 0.9706,
+#: the classifier alone 0.9822), every label >= 0.98 but ``1ipc``, 13 of 16 (0.8125; the
+#: classifier alone 15 of 16, but by the gate the rules keep 1ipc). The model before
+#: (209dbb3) read 0.9331 here, 1ipc 9 of 16: three first bounces read as a second impact
+#: (now chatter by the 0.06 T rule) and grazing impacts below the threshold (some now found
+#: by the phase search). The floors guard what is achieved (one case of slack on 1ipc);
+#: the ``1ipc`` miss is reported in the README and the notes.
+RECALL_FLOOR = {lab: 0.9 for lab in LABELS} | {"1ipc": 0.75}
+BALANCED_FLOOR = 0.96
 
 
 @pytest.mark.slow
