@@ -645,6 +645,19 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
     resid[bad] = 0.0
     sigma = fit.sigma = robust_std(good_sample(resid, bad)) or sigma
     n_start = n_prev = fit.n
+
+    def fresh_resid():
+        # the residual of the pulses fitted now: the smooth part is made again when
+        # they changed (the old one dropped first: a long record's arrays are large)
+        nonlocal smooth, n_start
+        if fit.n != n_start:
+            del smooth
+            smooth = smooth_part()
+            n_start = fit.n
+        r = smooth - base
+        r[bad] = 0.0
+        return r
+
     fit.prune(threshold, sigma)
     fit.prune_lobes(threshold, sigma, mismatch)
     fit.prune_ringing(threshold, sigma, response)
@@ -671,12 +684,7 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
         n_impossible += fit.drop_infeasible(*kin)
     model_error = max(mismatch, 2.0 * response.misfit) if response is not None else mismatch
     if clip.any() and fit.n > 1:
-        if fit.n != n_start:
-            del smooth
-            smooth = smooth_part()
-            n_start = fit.n
-        resid = smooth - base
-        resid[bad] = 0.0
+        resid = fresh_resid()
         n_wake = fit.drop_clip_artefacts(resid, sigma, clip, model_error)
         if n_wake:
             fit.backfit(base, iterations=1)
@@ -690,12 +698,7 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
         # grazing one-impact-per-cycle motion) are looked for in the stacked cycles
         forcing = fit_forcing(rec.t, rec.xe, rec.meta.frequency)
         if forcing.source == "xe":
-            if fit.n != n_start:
-                del smooth
-                smooth = smooth_part()
-                n_start = fit.n
-            r = smooth - base
-            r[bad] = 0.0
+            r = fresh_resid()
             reach = hw + _MF_HALF
             found, sign = _phase_pulses(fit, r, sigma, fs, forcing.period, reach)
             del r
@@ -716,11 +719,7 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
                         fit.backfit(base, iterations=1)
                 n_phase = fit.n - before[0].size
                 if n_phase > 0:
-                    del smooth
-                    smooth = smooth_part()
-                    n_start = fit.n
-                    resid = smooth - base
-                    resid[bad] = 0.0
+                    resid = fresh_resid()
                     warnings.append(f"{n_phase} weak pulse(s) below the threshold found at one "
                                     "phase of the forcing cycle, repeating over the cycles "
                                     "(their sum over the cycles is above it)")
