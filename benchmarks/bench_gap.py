@@ -180,7 +180,16 @@ asym, a 1 ms contact named inclination, 2ipc_sym clearance errors called none (2
 no-impact friction and a -2.5 deg 2ipc_asym tilt called clearance; a multi_ipc asym +
 friction named asym + clearance.
 
-Latest fresh draws (2026-11-27, ``--drawn 24 --n-jobs 1`` each, run once at 209dbb3;
+Latest fresh draws (2026-11-27, ninth stop, ``--drawn 24 --n-jobs 1`` each, run once at
+24ace70; the gap code unchanged, the analysis with the reconstruction's end and centroid
+fixes and the phase search): 23101 top-1 15/16 (a 2ipc_sym tilt named clearance), none
+4/4, pairs 3/4, coverage 0.926; 23103 15/16 (a 2ipc_asym speed law named asym), 4/4, 2/4,
+0.867; 23107 15/16 (a 2ipc_sym clearance error called none), 4/4, 4/4, 0.931: top-1
+45/48, none 12/12, pairs 9/12 (three no_impact asym + friction at 13-14 mm named friction
+alone: the ball never reaches a wall, so the asymmetry is undetectable, 0.00 < 4).
+Battery (seed 0): top-1 53/57, none 11/11, pairs 5/6, coverage 0.943.
+
+Fresh draws before (2026-11-27, ``--drawn 24 --n-jobs 1`` each, run once at 209dbb3;
 gap code as at 19101-19107's quote, detection changed only on saturated records):
 21101 top-1 16/16, none 4/4, pairs 3/4, coverage 0.935; 21103 16/16, 4/4, 3/4, 0.833;
 21107 15/16 (a 2ipc_asym speed law named asym), 4/4, 3/4, 0.857: top-1 47/48, none

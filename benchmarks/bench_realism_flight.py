@@ -30,7 +30,11 @@ The recordings are simulated again for their truth (the analyses come from the c
 Figures are quoted on the held-back ``holdout10`` split (``test`` and ``holdout`` to
 ``holdout9`` were looked at case by case); ``--split dev`` is for tuning.
 
-Measured (holdout9, 60 cases, run once, 2026-11-27, at 209dbb3): identified 5, all within
+Measured (holdout10, 60 cases, run once, 2026-11-27, at 24ace70): identified 9, within 5
+(0.083; target 0.9: 015, 022, 027, 033, 044), **outside 4** (002, 030, 036, 045: theta
+0.35-0.95 deg off with standard errors 0.06-0.12 deg, mu within 0.03 on all but 002,
+0.014 off; Hunt-Crossley walls of unequal stiffness), bad 0, no input error. The same
+code on holdout9 gives what 209dbb3 gave. Earlier (holdout9, at 209dbb3): identified 5, all within
 (0.083; target 0.9: 005, 011, 038, 044, 058), outside 0, bad 0; 1 input error (holdout9-025:
 1 usable impact for 5 candidate terms). Earlier (holdout8, at e634b4a): identified 7, all within
 (0.117; target 0.9: 003, 010, 014, 030, 052, 058, 059), outside 0, bad 0, no input error.

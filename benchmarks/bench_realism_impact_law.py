@@ -36,7 +36,11 @@ law so that the impact law is scored on its own:
   target line is the strict share.
 
 Figures are quoted on the ``holdout10`` split (see :mod:`vidiscover.corpus`).
-Measured (holdout9, 60 cases, run once, 2026-11-27, at 209dbb3): constant-r walls reported
+Measured (holdout10, 60 cases, run once, 2026-11-27, at 24ace70): constant-r walls reported
+constant 0.983 of 60 (021 right read 1 - 0.2645 v^2); Hunt-Crossley walls within 0.03 at
+the third clearance 0.983 of 60 (048 right: 1 - 0.3815 v^0.5, rms 0.047 at b x 0.83; true
+r inside the 95 % band at 0.909 of 3043 impacts). Earlier (holdout9, at 209dbb3):
+constant-r walls reported
 constant 0.984 of 64 (014 left read Hunt-Crossley); Hunt-Crossley walls within 0.03 at the
 third clearance 0.963 of 54 (013 left: a constant read at the pooled clearances, rms 0.061
 at b x 0.67 with a band 0.153 wide; 049 right: 1 - 0.573 v^2, rms 0.048 up to 1.39 v_max;
