@@ -435,11 +435,33 @@ def _share2(ctx: FeatureContext) -> float:
     return float((c == 2).mean()) if c.size else _NAN
 
 
+def alternation_share(side: np.ndarray) -> float:
+    """Share of consecutive impacts on opposite walls (paper eq. 5); NaN below two."""
+    if side.size < 2:
+        return _NAN
+    return float((side[1:] != side[:-1]).mean())
+
+
+def alternation_asymmetry(t: np.ndarray, side: np.ndarray, period: float) -> float:
+    """|mean dt after a right impact - mean dt after a left impact| / T (alternating pairs).
+
+    ``t`` impact times (s), ``side`` their walls ("right"/"left"), ``period`` T (s); NaN
+    below three impacts or without a pair of each kind.
+    """
+    if t.size < 3:
+        return _NAN
+    dt = np.diff(t)
+    alt = side[1:] != side[:-1]
+    ar = dt[alt & (side[:-1] == "right")]
+    al = dt[alt & (side[:-1] == "left")]
+    if not (ar.size and al.size):
+        return _NAN
+    return float(abs(ar.mean() - al.mean()) / period)
+
+
 def _alternation(ctx: FeatureContext) -> float:
     """Share of consecutive impacts on opposite walls (paper eq. 5)."""
-    if ctx.t.size < 2:
-        return _NAN
-    return float((ctx.side[1:] != ctx.side[:-1]).mean())
+    return alternation_share(ctx.side)
 
 
 def _chatter(ctx: FeatureContext) -> float:
@@ -456,15 +478,7 @@ def _right_share(ctx: FeatureContext) -> float:
 
 def _asym(ctx: FeatureContext) -> float:
     """|mean dt after a right impact - mean dt after a left impact| / T (alternating pairs)."""
-    if ctx.t.size < 3:
-        return _NAN
-    dt = np.diff(ctx.t)
-    alt = ctx.side[1:] != ctx.side[:-1]
-    ar = dt[alt & (ctx.side[:-1] == "right")]
-    al = dt[alt & (ctx.side[:-1] == "left")]
-    if not (ar.size and al.size):
-        return _NAN
-    return float(abs(ar.mean() - al.mean()) / ctx.period)
+    return alternation_asymmetry(ctx.t, ctx.side, ctx.period)
 
 
 def _dt_cv(ctx: FeatureContext) -> float:

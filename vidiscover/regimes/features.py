@@ -48,7 +48,14 @@ import math
 
 import numpy as np
 
-from ..analysis.returnmap import ANALYSIS_FEATURES, FeatureContext, FeatureSet, cycle_counts
+from ..analysis.returnmap import (
+    ANALYSIS_FEATURES,
+    FeatureContext,
+    FeatureSet,
+    alternation_asymmetry,
+    alternation_share,
+    cycle_counts,
+)
 from .labels import same_wall_returns
 
 __all__ = ["REGIME_FEATURES", "ALL_FEATURES", "STATE_FEATURES", "IMPACT_FEATURES",
@@ -522,22 +529,13 @@ def _merged_share2(ctx: FeatureContext) -> float:
 
 def _merged_alternation(ctx: FeatureContext) -> float:
     """Share of consecutive merged impacts on opposite walls."""
-    s = ctx.side[merged_impacts(ctx)]
-    return float((s[1:] != s[:-1]).mean()) if s.size >= 2 else _NAN
+    return alternation_share(ctx.side[merged_impacts(ctx)])
 
 
 def _merged_asymmetry(ctx: FeatureContext) -> float:
     """``asymmetry`` of the merged impacts: |mean dt after right - after left| / T."""
     m = merged_impacts(ctx)
-    t, s = np.asarray(ctx.t, float)[m], ctx.side[m]
-    if t.size < 3:
-        return _NAN
-    dt = np.diff(t)
-    alt = s[1:] != s[:-1]
-    ar, al = dt[alt & (s[:-1] == "right")], dt[alt & (s[:-1] == "left")]
-    if not (ar.size and al.size):
-        return _NAN
-    return float(abs(ar.mean() - al.mean()) / ctx.period)
+    return alternation_asymmetry(np.asarray(ctx.t, float)[m], ctx.side[m], ctx.period)
 
 
 #: The cycle and side features of the impacts as the labels count them
