@@ -825,6 +825,7 @@ def _running_max(v: np.ndarray, half: int) -> np.ndarray:
 _PHASE_MIN_CYCLES = 8     # forcing cycles a phase-coherent search needs
 _PHASE_BLOCK = 4          # cycles summed at the fitted period before the drift search
 _PHASE_DRIFT = 3e-4       # relative error of the fitted forcing period searched (+/-)
+_PHASE_MAX_DRIFT = 32     # ... but at most this many samples of drift over the record
 _PHASE_JITTER = 1e-3      # (s) an impact's time about the cycles' common phase
 _PHASE_FOUND = 0.9        # share of cycles with a detection at the phase that ends the search
 _PHASE_STACK = 8.0        # stacked score a phase needs (noise: up to 6.1 on 470 paper-rig rows)
@@ -865,7 +866,13 @@ def _phase_pulses(fit: _Fitter, resid: np.ndarray, sigma: float, fs: float, peri
     if not (math.isfinite(P) and P > 4 * (reach + J)):
         return none
     span = int(math.ceil(P))
-    smax = int(math.ceil(n * _PHASE_DRIFT)) + 1
+    # the fitted period's error falls as the record's length to the -3/2, the drift it
+    # makes over the record as its -1/2: 3e-4 (the fit of a 5 s record is good to about
+    # 2e-4, ~10 samples of drift) and at most _PHASE_MAX_DRIFT samples on a long record,
+    # whose search would otherwise grow as its length squared (drifts x blocks; 4.4 M
+    # samples: 2641 drifts, 150 MB per array of the stack)
+    drift = min(_PHASE_DRIFT, _PHASE_MAX_DRIFT / n)
+    smax = int(math.ceil(n * drift)) + 1
     g = J + smax + _MF_HALF
     K = int((n - 2 * g - span) // P) + 1 if n > 2 * g + span else 0
     if K < _PHASE_MIN_CYCLES:
@@ -881,7 +888,7 @@ def _phase_pulses(fit: _Fitter, resid: np.ndarray, sigma: float, fs: float, peri
     nb = -(-K // _PHASE_BLOCK)
     kc = np.minimum(np.arange(nb) * _PHASE_BLOCK + (_PHASE_BLOCK - 1) / 2.0, K - 1)
     step = 2.0 / (K * P)                          # two samples of drift over the record
-    drifts = np.arange(-_PHASE_DRIFT, _PHASE_DRIFT + 0.5 * step, step)
+    drifts = np.arange(-drift, drift + 0.5 * step, step)
     shifts = np.rint(drifts[:, None] * kc[None, :] * P).astype(np.int64)      # (E, B)
     taps = [fit.tpl[s][3] for s in ((0, 1) if fit.two else (0,))]
     pad = nb * _PHASE_BLOCK - K
