@@ -1,6 +1,6 @@
 """Ground-truth regime labels from a simulated state (the README's 'Regime labels', a contract).
 
-DESIGN.md section 4 defines the labels from "impacts" and does not say what chatter
+The label contract defines the labels from "impacts" and does not say what chatter
 is; this module says which impacts count (:func:`chatter_mask`). An impact is chatter
 of the impact before it on the same wall (no impact on the other wall between) when
 
