@@ -105,6 +105,7 @@ from .signals import (
     release_freed_memory,
     robust_std,
     run_about,
+    running_max,
     savgol_smooth,
     smoother_window,
     true_runs,
@@ -811,17 +812,6 @@ def _nearest(p: np.ndarray, ref: np.ndarray) -> np.ndarray:
     return np.minimum(np.abs(p - lo), np.abs(p - hi))
 
 
-def _running_max(v: np.ndarray, half: int) -> np.ndarray:
-    """max(v[i - half : i + half + 1]) for every i (the window cut at the ends)."""
-    w, n = 2 * half + 1, v.size
-    r = np.concatenate([np.full(half, -np.inf), v, np.full(half, -np.inf)])
-    k = 1
-    while 2 * k <= w:                   # r[i] = max of k samples from i, k doubling
-        np.maximum(r[:-k], r[k:], out=r[:-k])
-        k *= 2
-    return np.maximum(r[:n], r[w - k:w - k + n])
-
-
 _PHASE_MIN_CYCLES = 8     # forcing cycles a phase-coherent search needs
 _PHASE_BLOCK = 4          # cycles summed at the fitted period before the drift search
 _PHASE_DRIFT = 3e-4       # relative error of the fitted forcing period searched (+/-)
@@ -910,7 +900,7 @@ def _phase_pulses(fit: _Fitter, resid: np.ndarray, sigma: float, fs: float, peri
         z = np.correlate(resid, tap[0], mode="same")
         z /= sigma
         for sg in ((1, -1) if not fit.two else ((1,) if s == 0 else (-1,))):
-            m = _running_max(z if sg > 0 else -z, J)[idx]
+            m = running_max(z if sg > 0 else -z, J)[idx]
             mv = m[valid > 0]
             if mv.size < 10 * span:
                 return none
@@ -1190,13 +1180,6 @@ _EDGE_HIDE = _MAX_CLIP_RUN   # read samples hidden at each stretch edge to measu
 _EDGE_MARGIN = 2.0           # the gate is this x the smooth part's change when they are hidden
 
 
-def _dilate(mask: np.ndarray, reach: int) -> np.ndarray:
-    """``mask`` widened by ``reach`` samples on both sides."""
-    c = np.concatenate([[0], np.cumsum(mask, dtype=np.int64)])
-    i = np.arange(mask.size)
-    return c[np.minimum(i + reach + 1, mask.size)] - c[np.maximum(i - reach, 0)] > 0
-
-
 def _saturation_edge_gate(fit, smoother_input, base: np.ndarray, sigma: float,
                           win: int) -> np.ndarray:
     """Per sample, the SNR a pulse there must add to the threshold: the bridge's error.
@@ -1217,7 +1200,7 @@ def _saturation_edge_gate(fit, smoother_input, base: np.ndarray, sigma: float,
     saturate 35 % of the samples (noise seeds 22001-22039): 2248 -> 810 false
     pulses, 1598 -> 1596 true ones.
     """
-    hide = _dilate(fit.sat, _EDGE_HIDE) & ~fit.sat
+    hide = running_max(fit.sat, _EDGE_HIDE) & ~fit.sat
     err = savgol_smooth(smoother_input(base, hide=hide), win)
     err -= savgol_smooth(smoother_input(base), win)
     gate = fit.matched(err)
