@@ -9,7 +9,10 @@ from __future__ import annotations
 import subprocess
 import sys
 
+import pytest
+
 from vidiscover import Effects, preset, record, simulate
+from vidiscover._workers import can_fork
 from vidiscover.io import write_recording
 
 _RUN = """
@@ -36,14 +39,12 @@ def test_an_analysis_imports_nothing_after_the_analysis_imports(tmp_path):
     assert out.stdout.split() == []
 
 
+@pytest.mark.skipif(not can_fork(), reason="workers are forked on Linux only")
 def test_law_workers_run_below_this_process_and_analysts_do_not():
     import os
 
-    from vidiscover._workers import can_fork
     from vidiscover.discovery.pipeline import LAW_WORKER_NICE, _workers_for
 
-    if not can_fork():
-        return
     here = os.nice(0)
     for fitting, added in ((True, LAW_WORKER_NICE), (False, 0)):
         with _workers_for(2, 2, fitting=fitting) as run:
