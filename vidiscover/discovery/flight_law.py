@@ -1060,7 +1060,8 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
         How far beyond the walls the equivalent impacts lie: "learned" (the default,
         :data:`_PENETRATION`) takes the learned force centroids' depths as they are,
         "free" takes one error of the learned penetration times per recording out of the
-        rows (:meth:`_Tents.depth_columns`).
+        rows (:meth:`_Tents.depth_columns`); a research option: it has identified wrong
+        laws that "learned" refuses (see :data:`_PENETRATION`).
 
     Returns
     -------
