@@ -35,7 +35,7 @@ law so that the impact law is scored on its own:
   at 1.4 times the speed is honest; one whose band is narrow and wrong is not. The
   target line is the strict share.
 
-Figures are quoted on the ``holdout10`` split (see :mod:`vidiscover.corpus`).
+Figures are quoted on the ``holdout11`` split (see :mod:`vidiscover.corpus`).
 Measured (holdout10, 60 cases, run once, 2026-11-27, at 24ace70): constant-r walls reported
 constant 0.983 of 60 (021 right read 1 - 0.2645 v^2); Hunt-Crossley walls within 0.03 at
 the third clearance 0.983 of 60 (048 right: 1 - 0.3815 v^0.5, rms 0.047 at b x 0.83; true
@@ -72,7 +72,7 @@ the sensors or the analysis change.
 
 Usage::
 
-    python benchmarks/bench_realism_impact_law.py [--split holdout10] [--n 60] [--n-boot 200]
+    python benchmarks/bench_realism_impact_law.py [--split holdout11] [--n 60] [--n-boot 200]
         [--cache DIR]
 """
 
@@ -234,7 +234,7 @@ def band_half_width(law, v: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.n
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout10", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout11", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--n-boot", type=int, default=200,
