@@ -43,7 +43,14 @@ given. The filter's ringing is part of that shape, so it is fitted, not counted.
    (one pulse split in two), and so is a pulse within 1.5 times the learned model
    error of a stronger one at its lag (:attr:`.pulse.PulseResponse.error_env`:
    ringing the model lacks); the neighbours are refitted. A pulse whose fit leaves a
-   residual above 3 times noise plus model error is flagged ``merged``.
+   residual above 3 times noise plus model error is flagged ``merged``. A pulse below
+   4 times the threshold is also fitted with a level step beside it (a local cubic,
+   the step within 4 samples): it is dropped when the step is significant (5 noise
+   sigmas) and the pulse, with it, falls below the threshold. Coulomb friction makes
+   such steps, ``2 mu m2 g / m1``, at every reversal of a sliding ball, whose edges
+   the matched filter read as weak pulses (issue 11). An impact at a reversal whose
+   pulse is below about twice the step's own SNR cannot be told from the step moved
+   by a fraction of a sample, and is dropped with it. Said in a warning.
 7. *Weak pulses at one phase of the forcing cycle.* When the record holds at most one
    pulse per forcing cycle (period from the fit of ``xe``, :func:`.signals.fit_forcing`),
    the residual's matched filter is stacked over the cycles (per phase, its largest
@@ -142,6 +149,10 @@ _RINGING_MARGIN = 1.5      # a pulse must exceed this x the learned model error 
 _WIDTHS = (1.0, 2.0, 3.0, 4.5, 6.0)   # longer contacts a learned model's pulse may have (samples)
 _WIDE_MIN = 25.0           # a longer contact must explain this many noise variances more ...
 _WIDE_SHARE = 0.5          # ... and this share of the residual beyond noise of the model's fit
+_STEP_GRID = 4.0           # (samples) a friction step is placed within this of a pulse ...
+_STEP_MIN = 5.0            # ... and must exceed this many noise sigmas to explain it
+_STEP_TEST_SNR = 4.0       # pulses below this x the threshold are tested against a step
+_STEP_CHUNK = 256          # pulses tested at once
 _MF_HALF = 4               # half-length of the matched filter's taps (samples)
 _WILD = 2.0                # a fitted peak beyond this x the data's in its window diverged
 
@@ -692,6 +703,16 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
             warnings.append(f"{n_wake} weak pulse(s) dropped: they fit worse than the pulse "
                             "model allows in the wake of a clipped impact, whose ringing "
                             "cannot be read")
+    if fit.n:
+        # friction reversals' level steps read as weak pulses (see _Fitter.drop_steps)
+        n_steps = fit.drop_steps(fresh_resid(), sigma, threshold, win // 2)
+        if n_steps:
+            fit.backfit(base, iterations=1)
+            fit.prune(threshold, sigma)
+            resid = fresh_resid()
+            warnings.append(f"{n_steps} weak pulse(s) dropped: they are the edge of a step "
+                            "of the LO acceleration (a friction reversal of a sliding ball), "
+                            "not an impact's pulse")
     cycles = n / fs * float(rec.meta.frequency)
     if (options.phase_search and fit.sat is None and _PHASE_MIN_CYCLES + 1 <= cycles
             and fit.n <= cycles - 1):
@@ -2290,6 +2311,98 @@ class _Fitter:
             r = rows[take]
             delta[r], amp[r], e[r], wid[r] = dw[take], aw[take], ew[take], w
         return delta, amp, e, wid
+
+    def step_scores(self, resid: np.ndarray, sigma: float, half: int, rows: np.ndarray):
+        """Per pulse of ``rows``: its SNR with a level step fitted beside it, and the step's.
+
+        ``resid`` is the data less the smooth part and every fitted pulse. About each
+        pulse (``half`` samples each side) its own rendering is put back and fitted
+        with a local cubic (the smooth part's error), the pulse's kernel and a filtered
+        unit step (the cumulated kernel of its wall's model) placed within
+        :data:`_STEP_GRID` samples of the pulse, where the step alone fits best (fitted
+        with the pulse, a step beside a pulse of the opposite sign mimics a step moved).
+
+        Returns
+        -------
+        (snr_with_step, step_snr, ok)
+            The pulse's and the step's least-squares amplitudes over their standard
+            errors (noise ``sigma``; signed, the pulse's positive), and whether the window
+            could be read (inside the record, no bad sample).
+        """
+        n = self.n_samples
+        m = rows.size
+        c, d = self._split()
+        c, d = c[rows], d[rows]
+        amp, wid = self.amp[rows], self.wid[rows]
+        j = np.arange(-half, half + 1)
+        k = c[:, None] + j[None, :]
+        ok = (k[:, 0] >= 0) & (k[:, -1] < n)
+        kk = np.clip(k, 0, n - 1)
+        ok &= ~self.bad[kk].any(axis=1)
+        P = self.kernel_rows(j, d, amp, wid)
+        y = resid[kk] + amp[:, None] * P
+        Q = np.linalg.qr(np.vander(j / max(half, 1), 4))[0]
+        y -= (y @ Q) @ Q.T
+        P -= (P @ Q) @ Q.T
+        grid = np.arange(-_STEP_GRID, _STEP_GRID + 1e-9, 0.25)
+        # the filtered unit steps at d + grid of each pulse's wall model
+        S = np.empty((m, grid.size, j.size))
+        left = amp < 0
+        for side, model in enumerate(self.models):
+            r = np.flatnonzero(left == bool(side))
+            if r.size == 0:
+                continue
+            H = model.span(self.fs) + 1
+            jj = np.arange(-H, H + 1, dtype=float)
+            q = d[r, None] + grid[None, :]
+            g = model.kernel(jj[None, None, :] - q[:, :, None], self.fs)
+            cg = np.cumsum(g, axis=2) / np.maximum(g.sum(axis=2, keepdims=True), 1e-300)
+            idx = np.clip(j + H, 0, 2 * H)
+            S[r] = np.where(j + H > 2 * H, 1.0, np.where(j + H < 0, 0.0, cg[:, :, idx]))
+        S -= (S @ Q) @ Q.T
+        a = np.maximum(np.einsum("mgw,mgw->mg", S, S), 1e-300)
+        sy = np.einsum("mgw,mw->mg", S, y)
+        best = np.argmax(sy * sy / a, axis=1)
+        r = np.arange(m)
+        a, sy = a[r, best], sy[r, best]
+        b = np.einsum("mw,mw->m", S[r, best], P)
+        cc = np.maximum(np.einsum("mw,mw->m", P, P), 1e-300)
+        py = np.einsum("mw,mw->m", P, y)
+        # each amplitude over its standard error in the fit of both (and the cubic)
+        pulse = (py - b * sy / a) / np.sqrt(np.maximum(cc - b * b / a, 1e-300)) / sigma
+        step = (sy - b * py / cc) / np.sqrt(np.maximum(a - b * b / cc, 1e-300)) / sigma
+        sg = np.where(amp >= 0, 1.0, -1.0)
+        return pulse * sg, step * sg, ok
+
+    def drop_steps(self, resid: np.ndarray, sigma: float, threshold: float, half: int,
+                   rows: np.ndarray | None = None) -> int:
+        """Drop weak pulses that are the edge of a level step; return how many.
+
+        Coulomb friction puts a step of ``2 mu m2 g / m1`` in the LO acceleration at
+        each reversal of the ball's sliding (the friction force on the LO changes sign);
+        the smoother blurs it and the matched filter reads its edge as a pulse (a
+        sliding ball that never hits, 12.8 kHz: 12 false impacts of SNR 5.5-6.7 at the
+        reversals). A pulse below :data:`_STEP_TEST_SNR` times the threshold (of
+        ``rows``, default all) is fitted with a step beside it (:meth:`step_scores`,
+        ``half`` samples each side); it is dropped when the step is significant (above
+        :data:`_STEP_MIN` noise sigmas) and the pulse, with the step fitted, is below the
+        threshold: an impact's force returns to zero, a step's level stays.
+        """
+        if self.n == 0:
+            return 0
+        rows = np.arange(self.n) if rows is None else rows
+        rows = rows[self.snr(sigma)[rows] < _STEP_TEST_SNR * threshold]
+        if rows.size == 0:
+            return 0
+        drop = np.zeros(self.n, dtype=bool)
+        for lo in range(0, rows.size, _STEP_CHUNK):
+            part = rows[lo:lo + _STEP_CHUNK]
+            pulse, step, ok = self.step_scores(resid, sigma, half, part)
+            drop[part] = ok & (pulse < threshold) & (np.abs(step) > _STEP_MIN)
+        n_drop = int(drop.sum())
+        if n_drop:
+            self.keep(~drop)
+        return n_drop
 
     def prune(self, threshold: float, sigma: float) -> None:
         if self.n == 0:
