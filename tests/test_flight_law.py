@@ -581,6 +581,9 @@ def test_a_law_that_moves_between_recordings_is_not_identified():
     assert "moves between recordings" in res.reason
     jk = res.diagnostic["jackknife"]
     assert jk["G"] == 3 and 0.2 < jk["theta_se"] < 0.35 and res.theta_se < 0.03
+    d = json.loads(json.dumps(res.to_dict()))       # the spread goes into discovery.json
+    assert d["jackknife"] == {"n_recordings": 3, "mu_se": pytest.approx(jk["mu_se"]),
+                              "theta_se": pytest.approx(jk["theta_se"])}
     assert abs(res.diagnostic["theta_deg"] - 1.0) > 10 * res.theta_se
     ok = discover_flight_law(clean, n_boot=0)
     _check(ok, 0.1, 1.0)
@@ -590,4 +593,4 @@ def test_a_law_that_moves_between_recordings_is_not_identified():
     # moves by its own imprecision (0.26 deg); no check, the pooled law stands
     two = discover_flight_law([_case(b, 0.1, 1.0)[0] for b in (0.006, 0.009)], n_boot=0)
     _check(two, 0.1, 1.0)
-    assert two.diagnostic["jackknife"]["G"] == 2
+    assert two.diagnostic["jackknife"]["G"] == 2 and two.to_dict()["jackknife"] is None

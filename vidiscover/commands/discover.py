@@ -8,7 +8,8 @@ atomically (bad input leaves nothing behind):
   ``flight.theta_deg``, ``flight.terms``, ``impact_law.right.formula``,
   ``impact_law.left.formula``; ``flight.identified`` and ``flight.reason``, with
   ``flight.mu``/``theta_deg`` null when the law is not identified and the raw fit
-  under ``flight.diagnostic_fit``; per wall ``terms``, ``coefficients``,
+  under ``flight.diagnostic_fit``, its leave-one-recording-out spread under
+  ``flight.jackknife``; per wall ``terms``, ``coefficients``,
   ``speed_range``, ``effect``, ``effect_threshold``, ``band``, the candidate
   tables, the comparison with a constant r, warnings);
 * ``equations.txt`` -- the discovered laws as text;

@@ -415,10 +415,16 @@ class FlightLawResult:
 
         Keys ``identified``, ``reason``, ``mu``, ``theta_deg``, ``terms``,
         ``coefficients``, ``equation``, ``mu_ci``, ``theta_ci``, ``n_flights``,
-        ``diagnostic_fit`` (the raw fit, not a result when not identified) and the
-        diagnostics. ``mu``/``theta_deg`` are None when not identified.
+        ``diagnostic_fit`` (the raw fit, not a result when not identified), ``jackknife``
+        (the leave-one-recording-out spread, ``n_recordings``, ``mu_se``, ``theta_se``;
+        None when fewer than 3 recordings were pooled) and the diagnostics.
+        ``mu``/``theta_deg`` are None when not identified.
         """
         diag = self.diagnostic
+        jk = diag.get("jackknife")
+        jk = None if not jk or jk.get("G", 0) < 3 else {
+            "n_recordings": int(jk["G"]), "mu_se": _num(jk["mu_se"]),
+            "theta_se": _num(jk["theta_se"])}
         return {"identified": bool(self.identified), "reason": self.reason,
                 "mu": _num(self.mu), "theta_deg": _num(self.theta_deg),
                 "terms": list(self.terms),
@@ -436,7 +442,7 @@ class FlightLawResult:
                 "misfit": _num(self.misfit),
                 "precision": _num(self.precision),
                 "mu_se": _num(self.mu_se), "theta_se": _num(self.theta_se),
-                "warnings": list(self.warnings),
+                "warnings": list(self.warnings), "jackknife": jk,
                 "diagnostic_fit": {
                     "mu": _num(diag.get("mu", math.nan)),
                     "theta_deg": _num(diag.get("theta_deg", math.nan)),
