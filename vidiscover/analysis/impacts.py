@@ -60,7 +60,12 @@ given. The filter's ringing is part of that shape, so it is fitted, not counted.
    read cycle by cycle at a matched-filter SNR of 2 within a window about the cycles'
    phase. A grazing one-impact-per-cycle motion's impacts (per-impact SNR 2-5) are
    found so; the mean of the added pulses must have the pulse's shape (a step of the
-   forced response at one phase, a friction reversal, has flanks). Said in a warning.
+   forced response at one phase, a friction reversal, has flanks) and, fitted with a
+   level step beside it as in step 6, must not be a step (step above 5 noise sigmas
+   and the pulse with it below the threshold or below 2 per cycle, while the other
+   sign stacks above 8 at another phase: the reversal back; friction reversals of 4
+   sigma each, stacked over 34 cycles, added 34 false pulses). Only the best phase is
+   read: a rejected train ends the search. Said in a warning.
 
 Clipping: a run of at most :data:`_MAX_CLIP_RUN` samples on one rail (a jump to the
 other rail ends a run) is a pulse too strong to read; runs within the kernel span of
@@ -722,7 +727,8 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
         if forcing.source == "xe":
             r = fresh_resid()
             reach = hw + _MF_HALF
-            found, sign = _phase_pulses(fit, r, sigma, fs, forcing.period, reach)
+            found, sign = _phase_pulses(fit, r, sigma, fs, forcing.period, reach,
+                                        threshold, win // 2)
             del r
             if found.size:
                 before = fit.pos, fit.amp, fit.wid
@@ -847,7 +853,8 @@ _PHASE_SHAPE = 0.4        # misfit of the mean confirmed pulse about its peak (s
 
 
 def _phase_pulses(fit: _Fitter, resid: np.ndarray, sigma: float, fs: float, period: float,
-                  reach: int) -> tuple[np.ndarray, int]:
+                  reach: int, threshold: float = np.inf,
+                  step_half: int = 0) -> tuple[np.ndarray, int]:
     """Weak pulses at one phase of the forcing cycle, found by stacking the cycles.
 
     A grazing one-impact-per-cycle motion hits the wall once per forcing cycle at a
@@ -863,7 +870,14 @@ def _phase_pulses(fit: _Fitter, resid: np.ndarray, sigma: float, fs: float, peri
     detection of that sign is confirmed cycle by cycle: the matched filter of that
     sign above :data:`_PHASE_CONFIRM` within the jitter of the expected position, with
     no fitted pulse within ``reach``; their mean must have the pulse's shape
-    (:data:`_PHASE_SHAPE`).
+    (:data:`_PHASE_SHAPE`) and, fitted with a level step beside it over ``step_half``
+    samples each side as :meth:`_Fitter.drop_steps` does per pulse, must not be a step
+    (a step above :data:`_STEP_MIN` noise sigmas and the pulse with it below
+    ``threshold`` or, per cycle, below :data:`_PHASE_CONFIRM`) when the other sign
+    stacks above :data:`_PHASE_STACK` at another phase too: the friction reversals of a
+    sliding ball, two per cycle of opposite signs. (A grazing train beside its own
+    friction step can be as step-like, 26008 tuning draw: step 7.5, 1.77 per cycle,
+    but its other sign stacks to 5.5 at its own phase.)
 
     Returns
     -------
@@ -917,6 +931,7 @@ def _phase_pulses(fit: _Fitter, resid: np.ndarray, sigma: float, fs: float, peri
 
     cnt = stacked(valid)
     best = (0.0, 0, 0, 0)
+    tops = {}                                     # per sign, its best score and phase
     for s, tap in enumerate(taps):
         z = np.correlate(resid, tap[0], mode="same")
         z /= sigma
@@ -934,6 +949,7 @@ def _phase_pulses(fit: _Fitter, resid: np.ndarray, sigma: float, fs: float, peri
             Z = np.where(cnt >= _PHASE_MIN_CYCLES, S / (sd * np.sqrt(np.maximum(cnt, 1.0))),
                          0.0)
             k = int(np.argmax(Z))
+            tops[sg] = (float(Z.flat[k]), int(np.unravel_index(k, Z.shape)[1]))
             if Z.flat[k] > best[0]:
                 best = (float(Z.flat[k]), sg, *np.unravel_index(k, Z.shape))
     val, sg, e, q = best
@@ -989,6 +1005,26 @@ def _phase_pulses(fit: _Fitter, resid: np.ndarray, sigma: float, fs: float, peri
     excess = float((miss[flank] ** 2).sum()) - flank.sum()
     if excess > _PHASE_SHAPE * mean[L] ** 2:
         return none
+    # the stack of a friction reversal's step (every cycle at one phase) can pass that
+    # check when its edge is sharp: fitted with a step beside it, its pulse is noise,
+    # and the reversal back (the step of the other sign, elsewhere in the cycle) stacks
+    # as high. A grazing impact's train comes with a step too (the ball reverses at the
+    # wall) but has no such twin: the other sign's best phase is its own lobes or noise
+    twin = tops.get(-sg, (0.0, 0))
+    gap = abs(twin[1] - q) % span
+    if step_half > 0 and twin[0] > _PHASE_STACK and min(gap, span - gap) > reach + J:
+        j = np.arange(-step_half, step_half + 1)
+        kk = pos[:, None] + j[None, :]
+        inside = (kk[:, 0] >= 0) & (kk[:, -1] < n)
+        inside &= ~fit.bad[np.clip(kk, 0, n - 1)].any(axis=1)
+        if inside.any():
+            y = resid[kk[inside]].sum(axis=0)[None, :] / math.sqrt(inside.sum())
+            one = np.full(1, float(sg))
+            pulse, stp = fit._step_fit(y, fit.kernel_rows(j, np.zeros(1), one), np.zeros(1),
+                                       one < 0, sigma, step_half)
+            floor = max(threshold, _PHASE_CONFIRM * math.sqrt(inside.sum()))
+            if sg * pulse[0] < floor and abs(stp[0]) > _STEP_MIN:
+                return none
     return pos.astype(float), sg
 
 
@@ -2334,7 +2370,6 @@ class _Fitter:
             could be read (inside the record, no bad sample).
         """
         n = self.n_samples
-        m = rows.size
         c, d = self._split()
         c, d = c[rows], d[rows]
         amp, wid = self.amp[rows], self.wid[rows]
@@ -2345,13 +2380,26 @@ class _Fitter:
         ok &= ~self.bad[kk].any(axis=1)
         P = self.kernel_rows(j, d, amp, wid)
         y = resid[kk] + amp[:, None] * P
+        pulse, step = self._step_fit(y, P, d, amp < 0, sigma, half)
+        sg = np.where(amp >= 0, 1.0, -1.0)
+        return pulse * sg, step * sg, ok
+
+    def _step_fit(self, y: np.ndarray, P: np.ndarray, d: np.ndarray, left: np.ndarray,
+                  sigma: float, half: int):
+        """Amplitudes over standard errors of pulse ``P`` and a step beside it, in ``y``.
+
+        ``y`` (m, 2 half + 1) are the samples about each pulse (centre ``d`` off the
+        middle sample, wall ``left``), ``P`` its kernel there; a local cubic is fitted
+        too, the step placed where it alone fits best (see :meth:`step_scores`).
+        """
+        m = y.shape[0]
+        j = np.arange(-half, half + 1)
         Q = np.linalg.qr(np.vander(j / max(half, 1), 4))[0]
         y -= (y @ Q) @ Q.T
         P -= (P @ Q) @ Q.T
         grid = np.arange(-_STEP_GRID, _STEP_GRID + 1e-9, 0.25)
         # the filtered unit steps at d + grid of each pulse's wall model
         S = np.empty((m, grid.size, j.size))
-        left = amp < 0
         for side, model in enumerate(self.models):
             r = np.flatnonzero(left == bool(side))
             if r.size == 0:
@@ -2375,8 +2423,7 @@ class _Fitter:
         # each amplitude over its standard error in the fit of both (and the cubic)
         pulse = (py - b * sy / a) / np.sqrt(np.maximum(cc - b * b / a, 1e-300)) / sigma
         step = (sy - b * py / cc) / np.sqrt(np.maximum(a - b * b / cc, 1e-300)) / sigma
-        sg = np.where(amp >= 0, 1.0, -1.0)
-        return pulse * sg, step * sg, ok
+        return pulse, step
 
     def drop_steps(self, resid: np.ndarray, sigma: float, threshold: float, half: int,
                    rows: np.ndarray | None = None) -> int:
