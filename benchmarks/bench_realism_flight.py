@@ -30,7 +30,11 @@ The recordings are simulated again for their truth (the analyses come from the c
 Figures are quoted on the held-back ``holdout11`` split (``test`` and ``holdout`` to
 ``holdout10`` were looked at case by case); ``--split dev`` is for tuning.
 
-Measured (holdout10, 60 cases, run once, 2026-11-27, at 24ace70): identified 9, within 5
+Measured (holdout11, 60 cases, run once, 2026-11-27, at 4530ce1): identified 5, all within
+(0.083; target 0.9: 025, 028, 032, 035, 047), outside 0, bad 0; 2 input errors (009,
+020: no usable flight in a recording). The leave-one-recording-out check refused one
+law that no other test refuses and that was right (029: mu 0.287 for 0.295, theta 0;
+spread 0.28 deg). Earlier (holdout10, at 24ace70, before that check): identified 9, within 5
 (0.083; target 0.9: 015, 022, 027, 033, 044), **outside 4** (002, 030, 036, 045: theta
 0.35-0.95 deg off with standard errors 0.06-0.12 deg, mu within 0.03 on all but 002,
 0.014 off; Hunt-Crossley walls of unequal stiffness), bad 0, no input error. The same

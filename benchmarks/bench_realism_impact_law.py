@@ -36,7 +36,11 @@ law so that the impact law is scored on its own:
   target line is the strict share.
 
 Figures are quoted on the ``holdout11`` split (see :mod:`vidiscover.corpus`).
-Measured (holdout10, 60 cases, run once, 2026-11-27, at 24ace70): constant-r walls reported
+Measured (holdout11, 60 cases, run once, 2026-11-27, at 4530ce1): constant-r walls reported
+constant 0.972 of 72 (043 both walls read 1 - 0.417 v^0.25); Hunt-Crossley walls within
+0.03 at the third clearance 0.930 of 43 (003 left rms 0.044, 004 left 0.037, 007 right
+0.033; true r inside the 95 % band at 0.898 of 2370 impacts). Earlier (holdout10, at
+24ace70): constant-r walls reported
 constant 0.983 of 60 (021 right read 1 - 0.2645 v^2); Hunt-Crossley walls within 0.03 at
 the third clearance 0.983 of 60 (048 right: 1 - 0.3815 v^0.5, rms 0.047 at b x 0.83; true
 r inside the 95 % band at 0.909 of 3043 impacts). Earlier (holdout9, at 209dbb3):
