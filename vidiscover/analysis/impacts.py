@@ -1357,6 +1357,27 @@ def _add_loads(y: np.ndarray, loads, sign: float) -> np.ndarray:
     return y
 
 
+def _cum_step(g: np.ndarray) -> np.ndarray:
+    """The filtered unit step over kernel rows ``g`` (last axis).
+
+    Their cumulative sum normalised to 1 at the row's end: the step response of the
+    pulse's instrument. The resting-load search and the friction-step test build their
+    step columns from it (:func:`_step_at`).
+    """
+    return np.cumsum(g, axis=-1) / np.maximum(g.sum(axis=-1, keepdims=True), 1e-300)
+
+
+def _step_at(cg: np.ndarray, idx: np.ndarray) -> np.ndarray:
+    """Steps ``cg`` (:func:`_cum_step` rows, (..., 2H + 1)) read at samples ``idx``.
+
+    ``idx`` counts from each row's first sample (broadcast against the rows): 0 before
+    the row, 1 after it.
+    """
+    w = cg.shape[-1] - 1
+    at = np.broadcast_to(np.clip(idx, 0, w), cg.shape[:-1] + idx.shape[-1:])
+    return np.where(idx > w, 1.0, np.where(idx < 0, 0.0, np.take_along_axis(cg, at, axis=-1)))
+
+
 def _rest_loads(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
                 load_ratio: float, sigma: float, win: int, threshold: float, *,
                 late: bool = True):
@@ -1559,8 +1580,7 @@ def _rest_scan(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
         gp[:, lo:lo + 2 * H + 1] = g1
         cp = np.ones((frac.size, w0))
         cp[:, :lo] = 0.0
-        cp[:, lo:lo + 2 * H + 1] = np.cumsum(g1, axis=1) / np.maximum(
-            g1.sum(axis=1, keepdims=True), 1e-300)
+        cp[:, lo:lo + 2 * H + 1] = _cum_step(g1)
         row = inv.reshape(grid.shape)
         load = -load_ratio * base[k] * (k < lift[:, None])
         P = sliding_window_view(gp, nk, axis=1)[row, off + lo]
@@ -1634,11 +1654,9 @@ def _rest_step(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
     # the filtered unit step of each entry: the cumulative kernel, normalised
     jj = np.arange(-H, H + 1, dtype=float)
     g = model.kernel(jj[None, :] - (grid - fl)[:, None], fit.fs)
-    cg = np.cumsum(g, axis=1) / np.maximum(g.sum(axis=1, keepdims=True), 1e-300)
+    cg = _cum_step(g)
     idx = k[None, :] - fl.astype(np.int64)[:, None] + H
-    G = np.where(idx > 2 * H, 1.0,
-                 np.where(idx < 0, 0.0,
-                          np.take_along_axis(cg, np.clip(idx, 0, 2 * H), axis=1)))
+    G = _step_at(cg, idx)
     load = -load_ratio * base[k] * (k < lift)
     pk = fit.peaks[side]
     # the entry pulse of each entry, at kw - grid = (k - floor(grid)) - frac(grid), both
@@ -2404,9 +2422,7 @@ class _Fitter:
             jj = np.arange(-H, H + 1, dtype=float)
             q = d[r, None] + grid[None, :]
             g = model.kernel(jj[None, None, :] - q[:, :, None], self.fs)
-            cg = np.cumsum(g, axis=2) / np.maximum(g.sum(axis=2, keepdims=True), 1e-300)
-            idx = np.clip(j + H, 0, 2 * H)
-            S[r] = np.where(j + H > 2 * H, 1.0, np.where(j + H < 0, 0.0, cg[:, :, idx]))
+            S[r] = _step_at(_cum_step(g), j + H)
         S -= (S @ Q) @ Q.T
         # (a learned response whose kernel sums to about 0 over its support, e.g. a
         # mounted resonance near the sampling rate, makes the normalised step overflow:
@@ -2428,24 +2444,22 @@ class _Fitter:
         pulse[bad], step[bad] = np.inf, 0.0
         return pulse, step
 
-    def drop_steps(self, resid: np.ndarray, sigma: float, threshold: float, half: int,
-                   rows: np.ndarray | None = None) -> int:
+    def drop_steps(self, resid: np.ndarray, sigma: float, threshold: float, half: int) -> int:
         """Drop weak pulses that are the edge of a level step; return how many.
 
         Coulomb friction puts a step of ``2 mu m2 g / m1`` in the LO acceleration at
         each reversal of the ball's sliding (the friction force on the LO changes sign);
         the smoother blurs it and the matched filter reads its edge as a pulse (a
         sliding ball that never hits, 12.8 kHz: 12 false impacts of SNR 5.5-6.7 at the
-        reversals). A pulse below :data:`_STEP_TEST_SNR` times the threshold (of
-        ``rows``, default all) is fitted with a step beside it (:meth:`step_scores`,
-        ``half`` samples each side); it is dropped when the step is significant (above
-        :data:`_STEP_MIN` noise sigmas) and the pulse, with the step fitted, is below the
-        threshold: an impact's force returns to zero, a step's level stays.
+        reversals). A pulse below :data:`_STEP_TEST_SNR` times the threshold is fitted
+        with a step beside it (:meth:`step_scores`, ``half`` samples each side); it is
+        dropped when the step is significant (above :data:`_STEP_MIN` noise sigmas) and
+        the pulse, with the step fitted, is below the threshold: an impact's force
+        returns to zero, a step's level stays.
         """
         if self.n == 0:
             return 0
-        rows = np.arange(self.n) if rows is None else rows
-        rows = rows[self.snr(sigma)[rows] < _STEP_TEST_SNR * threshold]
+        rows = np.flatnonzero(self.snr(sigma) < _STEP_TEST_SNR * threshold)
         if rows.size == 0:
             return 0
         drop = np.zeros(self.n, dtype=bool)
