@@ -35,7 +35,7 @@ law so that the impact law is scored on its own:
   at 1.4 times the speed is honest; one whose band is narrow and wrong is not. The
   target line is the strict share.
 
-Figures are quoted on the ``holdout11`` split (see :mod:`vidiscover.corpus`).
+Figures are quoted on the ``holdout12`` split (see :mod:`vidiscover.corpus`).
 Measured (holdout11, 60 cases, run once, 2026-11-27, at 4530ce1): constant-r walls reported
 constant 0.972 of 72 (043 both walls read 1 - 0.417 v^0.25); Hunt-Crossley walls within
 0.03 at the third clearance 0.930 of 43 (003 left rms 0.044, 004 left 0.037, 007 right
@@ -76,7 +76,7 @@ the sensors or the analysis change.
 
 Usage::
 
-    python benchmarks/bench_realism_impact_law.py [--split holdout11] [--n 60] [--n-boot 200]
+    python benchmarks/bench_realism_impact_law.py [--split holdout12] [--n 60] [--n-boot 200]
         [--cache DIR]
 """
 
@@ -238,7 +238,7 @@ def band_half_width(law, v: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.n
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout11", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout12", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--n-boot", type=int, default=200,
