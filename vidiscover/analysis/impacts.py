@@ -1345,6 +1345,13 @@ _TAIL_ZETA = (0.05, 0.1, 0.2, 0.35, 0.5)
 _TAIL_RISE_MIN = 2.0     # ... for contacts of at least this many samples (ringing >= 4)
 _TAIL_REL_RISE = 0.25    # ... where a tail is all below this share of the pulse before
 _REST_BATCH = 80000      # entries x window samples of the step searches made together
+#: The resting-load search reads its fits from inner products (:func:`_rest_inner`) when
+#: the normalised step stays within this bound (an instrument's step overshoots by tens
+#: of per cent); beyond it (a kernel summing to about zero) each column is projected.
+_REST_STEP_MAX = 10.0
+#: ... and where the pulse and the step columns keep more than this share of their
+#: energy off the window's basis (see :func:`_rest_inner`).
+_REST_ILL = 1e-6
 
 
 def _add_loads(y: np.ndarray, loads, sign: float) -> np.ndarray:
@@ -1598,22 +1605,16 @@ def _rest_scan(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
         Qt = Q.transpose(0, 2, 1)
         yw = y[k]
         y0 = yw - (Q @ (Qt @ yw[:, :, None]))[:, :, 0]
-        # (in place where the values are the same: these arrays are the search's bulk)
-        T = (Tw @ Q) @ Qt
-        np.subtract(Tw, T, out=T)
-        u = (P @ Q) @ Qt
-        np.subtract(P, u, out=u)
-        u /= np.maximum(np.sqrt(np.einsum("ngw,ngw->ng", u, u)), 1e-300)[:, :, None]
-        r0 = u * (u @ y0[:, :, None])
-        np.subtract(y0[:, None, :], r0, out=r0)
-        ut = u * np.einsum("ngw,ngw->ng", u, T)[:, :, None]
-        T -= ut
-        R = np.subtract(r0, T, out=ut)
-        rss = np.einsum("ngw,ngw->ng", R, R)
+        if np.abs(cp).max() <= _REST_STEP_MAX:
+            gains, step2, rss, ill = _rest_inner(P, Tw, Q, y0)
+            if ill.any():
+                gains[ill], step2[ill], rss[ill] = _rest_projected(P[ill], Tw[ill], Q[ill],
+                                                                  Qt[ill], y0[ill])
+        else:
+            gains, step2, rss = _rest_projected(P, Tw, Q, Qt, y0)
         for j, b in enumerate(np.argmin(rss, axis=1)):
-            gain = float(r0[j, b] @ r0[j, b] - rss[j, b])
-            Tb = 1.0 * T[j, b]
-            if not (gain > _REST_DCHI2 * sigma ** 2 and gain > _REST_SHARE * float(Tb @ Tb)):
+            gain = float(gains[j, b])
+            if not (gain > _REST_DCHI2 * sigma ** 2 and gain > _REST_SHARE * float(step2[j, b])):
                 continue
             e = int(np.floor(grid[j, b]))
             kk = np.arange(e - H, int(lift[j]))
@@ -1624,6 +1625,63 @@ def _rest_scan(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
                                    rcond=None)[0][-1]
             res[ms[j]] = (e - H, vals), grid[j, b], coef
     return res
+
+
+def _rest_inner(P: np.ndarray, Tw: np.ndarray, Q: np.ndarray, y0: np.ndarray):
+    """``(gain, |step|^2, rss, ill)`` of :func:`_rest_scan`'s fits, from inner products.
+
+    ``P`` and ``Tw`` (n, G, K) are the entry pulse and the load step of each (search,
+    grid point), ``Q`` (n, K, 6) the orthonormal basis of the local cubic and the last
+    pulse's correction, ``y0`` (n, K) the window's data off it. With ``a = P - QQ'P``,
+    ``t = Tw - QQ'Tw`` and ``u = a / |a|``, the residual of the fit is
+    ``(y0 - t) - u u'(y0 - t)``, of squared norm ``|y0 - t|^2 - (u'y0 - u't)^2``; the
+    gain is what it explains beyond ``y0`` off the pulse, and the step's explained
+    part is ``t - u u't``. The columns are never projected one by one: 3.4 times less
+    CPU than :func:`_rest_projected` on the Table-2 recording, equal to rounding where
+    the step is of order one (:data:`_REST_STEP_MAX`) and the pulse and the step stand
+    out of the basis. The searches where they do not (``|a|^2`` or ``|t|^2`` below
+    :data:`_REST_ILL` of the column's own energy: the difference of two near-equal
+    numbers keeps no digit; a pulse column nearly inside the basis, as on three of the
+    classifier's training draws) or where a value is not finite are flagged (the last
+    value returned), for :func:`_rest_projected`.
+    """
+    M = np.concatenate([Q, y0[:, :, None]], axis=2)                      # (n, K, 7)
+    PM, TM = P @ M, Tw @ M                                                 # (n, G, 7)
+    qp, qt = PM[..., :-1], TM[..., :-1]
+    pp, tw2 = np.einsum("ngw,ngw->ng", P, P), np.einsum("ngw,ngw->ng", Tw, Tw)
+    aa = pp - np.einsum("ngc,ngc->ng", qp, qp)
+    at = np.einsum("ngw,ngw->ng", P, Tw) - np.einsum("ngc,ngc->ng", qp, qt)
+    tt = tw2 - np.einsum("ngc,ngc->ng", qt, qt)
+    ill = ((aa <= _REST_ILL * pp) | (tt <= _REST_ILL * tw2)).any(axis=1)
+    na = np.sqrt(np.where(aa > _REST_ILL * pp, aa, 1.0))
+    uy, ut, ty = PM[..., -1] / na, at / na, TM[..., -1]
+    rss = (np.einsum("nw,nw->n", y0, y0)[:, None] - 2.0 * ty + tt) - (uy - ut) ** 2
+    gains = 2.0 * ty - tt - 2.0 * uy * ut + ut ** 2
+    ill |= ~np.isfinite(rss).all(axis=1) | ~np.isfinite(gains).all(axis=1)
+    return gains, tt - ut ** 2, rss, ill
+
+
+def _rest_projected(P: np.ndarray, Tw: np.ndarray, Q: np.ndarray, Qt: np.ndarray,
+                    y0: np.ndarray):
+    """:func:`_rest_inner`'s values, each column projected (as :func:`_rest_step`).
+
+    For steps far from order one (a learned response whose kernel sums to about zero,
+    a mounted resonance near the sampling rate: its normalised step is huge), where
+    the inner products' differences of large numbers lose every digit.
+    """
+    # (in place where the values are the same: these arrays are the search's bulk)
+    T = (Tw @ Q) @ Qt
+    np.subtract(Tw, T, out=T)
+    u = (P @ Q) @ Qt
+    np.subtract(P, u, out=u)
+    u /= np.maximum(np.sqrt(np.einsum("ngw,ngw->ng", u, u)), 1e-300)[:, :, None]
+    r0 = u * (u @ y0[:, :, None])
+    np.subtract(y0[:, None, :], r0, out=r0)
+    ut = u * np.einsum("ngw,ngw->ng", u, T)[:, :, None]
+    T -= ut
+    R = np.subtract(r0, T, out=ut)
+    rss = np.einsum("ngw,ngw->ng", R, R)
+    return np.einsum("ngw,ngw->ng", r0, r0) - rss, np.einsum("ngw,ngw->ng", T, T), rss
 
 
 def _rest_step(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
