@@ -46,6 +46,8 @@ def test_a_chattering_ball_that_rides_the_wall_flies_a_parabola_from_its_release
     assert n_stick[0.0] == 0 and n_stick[case.theta] >= 38, n_stick
     assert err[0.0] > 0.04, err
     assert abs(err[case.theta]) <= 0.003, err
+    # analyze passes the flight law's inclination to the reconstruction itself
+    assert abs(out.restitution.right.rms - rms_true) <= 0.003
 
 
 def test_no_inclination_is_the_default_and_a_bad_one_is_an_input_error():

@@ -244,7 +244,7 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None,
         off = estimate_offsets(rec.t, rec.x, rec.a, rec.xe, forcing, det.t)
         rec = _without_offsets(rec, off, overwrite)
     det = _smooth_part_corrected(det, off.a_bias)
-    recon = reconstruct(det, rec, b=b, mu=mu)
+    recon = reconstruct(det, rec, b=b, mu=mu, theta_deg=theta_deg)
     if theta_deg != 0.0:
         recon = _tilted(recon, det, rec, mu, theta_deg)
     rest = estimate_restitution(recon, det, n_boot=n_boot, seed=seed)
