@@ -26,7 +26,8 @@ import numpy as np
 from ..analysis.signals import fill_gaps, robust_std
 
 __all__ = ["STATS", "Signature", "GapComponents", "measure", "compare", "noise_scales",
-           "energy_distance", "mirror", "GROUPS", "FORM_SCALE"]
+           "energy_distance", "mirror", "GROUPS", "FORM_SCALE", "LO_STATS", "LO_FORM",
+           "blunt_lo"]
 
 #: Statistic name -> (group, floor of its noise scale, description).
 STATS: dict[str, tuple[str, float, str]] = {}
@@ -74,8 +75,11 @@ _stat("flights.speed_ratio", "flights", 0.01,
 _stat("flights.drag", "flights", 0.02,
       "force on the LO along the ball's relative motion during free flights (units m2 g: "
       "a friction coefficient); the LO's own dynamics, fitted, leave 0")
-_stat("lo.amplitude", "lo", 0.01, "log LO amplitude at f relative to the base amplitude")
-_stat("lo.phase", "lo", 0.01, "LO phase at f relative to the base (rad)")
+# floors 0.003: the resolution of the LO's response. A model-form allowance brings
+# them to 0.01 (LO_FORM, in the nominal model's replicate variances) except where the
+# other statistics see no significant gap (diagnose.nominal_model's sharp look)
+_stat("lo.amplitude", "lo", 0.003, "log LO amplitude at f relative to the base amplitude")
+_stat("lo.phase", "lo", 0.003, "LO phase at f relative to the base (rad)")
 _stat("lo.envelope", "lo", 0.02, "envelope modulation of the LO (label index M)")
 _stat("excitation.h2", "excitation", 0.002, "base 2nd harmonic (relative, cos part)")
 _stat("excitation.h2s", "excitation", 0.002, "base 2nd harmonic (relative, sin part)")
@@ -112,6 +116,33 @@ FORM_SCALE: dict[str, float] = {
     "momentum.opposite": 0.22, "sensors.pulse_width": 0.25,
     "sensors.residual_20": 1.4, "sensors.residual_40": 0.87, "sensors.residual_80": 0.3,
 }
+
+#: The LO response statistics and their model-form allowance (same units). Their
+#: floors (0.003) are the LO response's resolution; the allowance (with it the scale
+#: is 0.01, as these statistics' floors were before) enters the nominal model's
+#: replicate variances (:func:`blunt_lo`) except in the sharp look of
+#: :func:`~vidiscover.gap.diagnose.nominal_model`: where the other statistics see no
+#: significant gap, a clearance error on a symmetric two-impact orbit shows only here
+#: (both walls move alike; the impacts' momentum transfer moves the LO's log amplitude
+#: and phase by 0.005-0.01 per mm: spent draws 25101 #6, 25103 #6 and #18, nominal
+#: gaps 2.4-4.0 -> 10.6-14.7, the clearance fit leaves 0.3-1.1), while compliant
+#: no-effect recordings differ from the nominal model by <= 0.0008 in both (31 of the
+#: 32 cases of :func:`~vidiscover.gap.calibration.none_cases`, calibrate and quote;
+#: the 32nd, quote 8009, is above the significance threshold with the allowance).
+#: Sharp everywhere, effects the catalogue cannot fit exactly lean on them (seed-0
+#: battery: a restitution drift named clearance_error, a 15 mm friction named
+#: clearance_error instead of unexplained).
+LO_STATS = ("lo.amplitude", "lo.phase")
+LO_FORM = math.sqrt(0.01 ** 2 - 0.003 ** 2)
+
+
+def blunt_lo(rep_var: dict[str, float]) -> dict[str, float]:
+    """``rep_var`` with the LO statistics' model-form allowance (:data:`LO_FORM`) added."""
+    out = dict(rep_var)
+    for k in LO_STATS:
+        out[k] = out.get(k, 0.0) + LO_FORM ** 2
+    return out
+
 
 #: Component groups in report order.
 GROUPS = ("impacts.right", "impacts.left", "impacts.walls", "flights", "lo", "timing", "sensors",

@@ -25,6 +25,7 @@ from .components import (
     GROUPS,
     LASER_STATS,
     STATS,
+    blunt_lo,
     compare,
     gate_laser,
     laser_fit_quality,
@@ -381,6 +382,16 @@ def _second_look(model: Model, nominal: CandidateFit, real, always: bool = False
                                       gap=compare(real, sig, model.rep_var))
 
 
+#: Nominal gap (the LO statistics with their model-form allowance, without the laser's)
+#: below which the LO statistics are compared on their floors alone (the sharp look of
+#: :func:`nominal_model`, :data:`~vidiscover.gap.components.LO_STATS`): the
+#: significance threshold, so only recordings the other statistics do not call off
+#: the model are judged with it (a clearance error on a symmetric two-impact orbit:
+#: 25101 #6 read 4.04 with the allowance); above it a fit that leaves a residual there
+#: (a restitution drift, seed-0 battery) is not made to look worse than it did.
+SHARP_LO_BELOW = SIGNIFICANT_GAP
+
+
 def nominal_model(rec, an=None, *, seed: int = 0, run=None, second_look: bool = True
                   ) -> tuple[Model, CandidateFit, int]:
     """Nominal model with its attractor, noise scales and validated gap.
@@ -390,7 +401,10 @@ def nominal_model(rec, an=None, *, seed: int = 0, run=None, second_look: bool = 
     mirror-image attractors; which one the rig sits on is history, not physics).
     Replicates with slightly perturbed initial conditions and other sensor noise
     give the noise scale of every statistic (in chaotic regimes this is the
-    trajectory-to-trajectory spread). ``run(worker, items)`` simulates the independent
+    trajectory-to-trajectory spread); where the nominal gap stays below
+    :data:`SHARP_LO_BELOW` the LO statistics lose their model-form allowance
+    (``model.sharp_lo``) and the validation draw is chosen again with them.
+    ``run(worker, items)`` simulates the independent
     draws (default: one after the other, here; :func:`diagnose` shares them between
     its processes). The laser-kink statistics are a second look (:func:`_second_look`;
     ``second_look=False``: always compared).
@@ -408,7 +422,8 @@ def nominal_model(rec, an=None, *, seed: int = 0, run=None, second_look: bool = 
     model = dataclasses.replace(model, real=without(real, LASER_STATS), full=real)
     fx0 = Effects()
     scan = run(signature_item, [(model, fx0, None, v, seed) for v in BALL_SPEEDS])
-    gaps = [compare(model.real, s, {}, allow_mirror=True).total for s in scan]
+    floors = blunt_lo({})                       # the floors, the LO's with its allowance
+    gaps = [compare(model.real, s, floors, allow_mirror=True).total for s in scan]
     order = np.argsort(gaps, kind="stable")
     best = int(order[0])
     model = dataclasses.replace(model, ball_speed=BALL_SPEEDS[best],
@@ -425,13 +440,21 @@ def nominal_model(rec, an=None, *, seed: int = 0, run=None, second_look: bool = 
         (model, fx0, None, model.ball_speed * (1 + 0.01 * j), seed + j)
         for j in range(1, N_REPLICATES)] + val_items)
     reps = [scan[best]] + sims[:N_REPLICATES - 1]
-    reps = [r if compare(model.real, r, {}).total <= compare(model.real, mirror(r), {}).total
+    reps = [r if compare(model.real, r, floors).total
+            <= compare(model.real, mirror(r), floors).total
             else mirror(r) for r in reps]                  # all on the recording's side
-    model = model.with_rep_var(noise_scales(reps))
+    rep_var = noise_scales(reps)
+    model = model.with_rep_var(blunt_lo(rep_var))
     val = best_draw(model, fx0, sims[N_REPLICATES - 1:])
     nominal = CandidateFit(name="nominal", params={}, n_params=0, r=model.params.r,
                            effects=fx0, gap=compare(model.real, val, model.rep_var),
                            signature=val, n_sims=len(scan) + N_REPLICATES + 1 + obj.n_sims)
+    if nominal.gap.total < SHARP_LO_BELOW:
+        # the sharp look (components.LO_STATS): the LO statistics on their floors
+        model = dataclasses.replace(model, rep_var=rep_var, sharp_lo=True)
+        val = best_draw(model, fx0, sims[N_REPLICATES - 1:])
+        nominal = dataclasses.replace(nominal, signature=val,
+                                      gap=compare(model.real, val, model.rep_var))
     model, nominal = _second_look(model, nominal, real, always=not second_look,
                                   draws=sims[N_REPLICATES - 1:])
     return model, nominal, nominal.n_sims

@@ -97,6 +97,9 @@ class Model:
     full : Signature, optional
         The recording's statistics with the laser-kink ones, where ``real`` leaves
         them out (:func:`~vidiscover.gap.diagnose.nominal_model`'s second look).
+    sharp_lo : bool
+        ``rep_var`` lacks the LO statistics' model-form allowance
+        (:func:`~vidiscover.gap.components.blunt_lo`; the nominal model's sharp look).
     """
 
     params: SystemParams
@@ -112,6 +115,7 @@ class Model:
     instrument: dict = field(default_factory=dict)
     refine: bool = True
     full: Signature | None = field(default=None, repr=False)
+    sharp_lo: bool = False
 
     def with_rep_var(self, rep_var: dict) -> Model:
         """A copy with replicate variances."""
