@@ -215,6 +215,22 @@ stays none at 3.2); tuning draw 28101 (``--drawn 24``): #6 (+clearance at 11.1 m
 2ipc_sym) none -> clearance_error, nothing else changed. Simulations: unchanged where the
 look does not fire; a clearance case that becomes significant is refined (80 -> 137).
 
+Then (gap22) the pairs are ranked on the sharp LO scales (``diagnose.PAIR_SHARP_LO``,
+``_choose_pair``): the pair fits keep the model's scales, and only the choice among the
+fitted pairs (and the parsimony rule between them) reads ``lo.amplitude`` and
+``lo.phase`` on their floors; the keep rule and every single-effect verdict are as
+before, and no simulation is added. Before -> after (same tree, flag off/on): spent
+25103 #23 (compliant asym + 2.8 deg tilt at 7.6 mm, multi_ipc) asym + clearance (6.97
+against the tilt pair's 7.18 blunt; 7.37 against 7.23 sharp) -> asym + tilt; tuning
+draw 28105 #22 (asym + friction at 7.1 mm, multi_ipc) asym + clearance -> asym +
+friction (pairs 3/4 -> 4/4); spent 25101/25103/25107 two-effect cases 8/12 -> 9/12
+(25101 #22 is asym + friction both ways on this tree); 28104 unchanged (pairs 4/4, top-1
+15/16, none 4/4); seed-0 battery (all 80 cases): every verdict the same (pairs 5/6,
+out-of-catalogue 6/6 unexplained, none 11/11), except #41 (asym alone at 15 mm, chaotic)
+whose false asym + clearance pair is no longer kept (the sharp pick, asym + excitation,
+scores worse than asym alone on the model's scales): coverage there 0/2 -> 2/2.
+Simulations: the same, but 290 -> 287 on #41.
+
 Usage::
 
     python benchmarks/bench_gap.py [--quick | --ci | --drawn N] [--n-jobs 2] [--seed 0]

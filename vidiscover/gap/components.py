@@ -27,7 +27,7 @@ from ..analysis.signals import fill_gaps, robust_std
 
 __all__ = ["STATS", "Signature", "GapComponents", "measure", "compare", "noise_scales",
            "energy_distance", "mirror", "GROUPS", "FORM_SCALE", "LO_STATS", "LO_FORM",
-           "blunt_lo"]
+           "blunt_lo", "sharpen_lo"]
 
 #: Statistic name -> (group, floor of its noise scale, description).
 STATS: dict[str, tuple[str, float, str]] = {}
@@ -141,6 +141,14 @@ def blunt_lo(rep_var: dict[str, float]) -> dict[str, float]:
     out = dict(rep_var)
     for k in LO_STATS:
         out[k] = out.get(k, 0.0) + LO_FORM ** 2
+    return out
+
+
+def sharpen_lo(rep_var: dict[str, float]) -> dict[str, float]:
+    """``rep_var`` without the allowance :func:`blunt_lo` added (inverse of it)."""
+    out = dict(rep_var)
+    for k in LO_STATS:
+        out[k] = max(out.get(k, 0.0) - LO_FORM ** 2, 0.0)
     return out
 
 
