@@ -36,7 +36,11 @@ law so that the impact law is scored on its own:
   target line is the strict share.
 
 Figures are quoted on the ``holdout12`` split (see :mod:`vidiscover.corpus`).
-Measured (holdout11, 60 cases, run once, 2026-11-27, at 4530ce1): constant-r walls reported
+Measured (holdout12, 60 cases, run once, 2026-11-27, at cccbf5f): constant-r walls reported
+constant 1.000 of 61; Hunt-Crossley walls within 0.03 at the third clearance 0.946 of 56
+(027 right rms 0.034, 050 right 0.033 and left 0.037: 050's impacts are timed 0.11 ms
+late, a learned response of another family than its Chebyshev chain); true r inside the
+95 % band at 0.879 of 3058 impacts. Earlier (holdout11, at 4530ce1): constant-r walls reported
 constant 0.972 of 72 (043 both walls read 1 - 0.417 v^0.25); Hunt-Crossley walls within
 0.03 at the third clearance 0.930 of 43 (003 left rms 0.044, 004 left 0.037, 007 right
 0.033; true r inside the 95 % band at 0.898 of 2370 impacts). Earlier (holdout10, at
