@@ -8,7 +8,9 @@ constant r and 82 impacts, this one the paper's Table 2 walls, 164 impacts in ch
 runs, whose ends the resting-load search visits: about 3 times as long, 18.6
 against 6.0 ms on an idle 2-core machine, 2026-11-26; 14.5 ms median, 13.6 best, on
 2026-11-27 after the searches were batched, 578f987-2c7bd81, with the same
-detections), ``N``
+detections; 8.4 ms median, 8.2 best, idle, 2026-11-27 after the resting-load search
+read its fits from inner products, 66dbce0, same detections; 10.5 / 9.5 in a run
+straight after the accuracy quotes), ``N``
 runs after one warm-up, median
 and best wall-clock time and the best CPU time, with the bootstrap at its default
 (``n_boot=1000``) and small (100, 0), printed next to DESIGN.md section 8's 6 ms target
