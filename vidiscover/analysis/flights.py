@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..params import G_ACCEL
-from .friction import solve_flights
+from .friction import falling_frame, solve_flights
 from .reconstruction import contact_durations, force_centroids
 
 __all__ = ["FlightData", "STEPS", "force_centroids", "reconstruct_flights",
@@ -243,13 +243,7 @@ def reconstruct_flights(t_s, t_e, y_s, y_e, v_start, v_end, lo_velocity, lo_acce
         W = w[:, None] + g0 * (T - t_s[:, None])
         return {"t": T, "w": W, "v": V, "zd": W - V, "acc": A, "closure": np.zeros(F)}
 
-    def vel(tq):
-        tq = np.asarray(tq, float).reshape(F, -1)
-        return lo_velocity(tq) - g0 * (tq - tq[:, :1])
-
-    def acc(tq):
-        return lo_acceleration(tq) - g0
-
+    vel, acc = falling_frame(lo_velocity, lo_acceleration, g0)
     sol = solve_flights(t_s, t_e, y_s, y_e - g0 * dt ** 2 / 2.0, vel, acc, mu,
                         v_start=v_start, v_end=v_end - g0 * dt, steps=M)
     W = sol.w + g0 * (sol.t - t_s[:, None])

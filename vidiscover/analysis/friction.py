@@ -35,7 +35,8 @@ import numpy as np
 
 from ..params import G_ACCEL
 
-__all__ = ["eq8_velocities", "solve_flights", "integrate_flights", "FlightSolution", "STEPS"]
+__all__ = ["eq8_velocities", "solve_flights", "integrate_flights", "falling_frame",
+           "FlightSolution", "STEPS"]
 
 #: Integration steps per flight of :func:`solve_flights`.
 STEPS = 96
@@ -187,6 +188,30 @@ def integrate_flights(t_s: np.ndarray, t_e: np.ndarray, y_s: np.ndarray, w_s: np
 def _part(v, n: int, sl: slice):
     """Rows ``sl`` of a per-flight value (an array of ``n``, a scalar, or None)."""
     return None if v is None else np.broadcast_to(np.asarray(v, dtype=float), (n,))[sl]
+
+
+def falling_frame(lo_velocity, lo_acceleration, g0: float):
+    """The LO's velocity and acceleration seen from a ball falling with ``g0`` along the base.
+
+    A constant acceleration of the ball along the base (``g0 = g sin(theta)``, m/s^2)
+    is absorbed by a change of frame: with ``Y = y - g0 (t - t_s)^2 / 2`` and the LO
+    velocity ``V = x' - g0 (t - t_s)`` the relative motion, and so friction's sticking
+    and sliding, are unchanged, and :func:`solve_flights` / :func:`integrate_flights`
+    solve the flights in that frame. ``t_s`` is the first time of each row of the
+    flights' time grids (their launch). Without an inclination the callables are
+    returned as they are.
+    """
+    if not g0:
+        return lo_velocity, lo_acceleration
+
+    def velocity(tq):
+        tq = np.asarray(tq, dtype=float)
+        return lo_velocity(tq) - g0 * (tq - tq[:, :1])
+
+    def acceleration(tq):
+        return lo_acceleration(tq) - g0
+
+    return velocity, acceleration
 
 
 def solve_flights(t_s: np.ndarray, t_e: np.ndarray, y_s: np.ndarray, y_e: np.ndarray,

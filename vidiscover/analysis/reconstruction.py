@@ -77,7 +77,7 @@ from ..acquisition import dc_group_delay, shape_centroid
 from ..errors import InputError
 from ..params import G_ACCEL
 from ._table import check_columns, to_frame
-from .friction import integrate_flights, solve_flights
+from .friction import falling_frame, integrate_flights, solve_flights
 from .impacts import ImpactDetection
 from .signals import fill_gaps, robust_std, savgol_taps
 
@@ -1061,15 +1061,7 @@ def _flights(t_imp, side, x_imp, y_imp, v_minus, b, mu, t, x_f, acc, fs, stick_t
             # (as flights.reconstruct_flights): Y = y - g0 (t - t_rel)^2 / 2, V = x' -
             # g0 (t - t_rel); the rows of the flights' time grids start at t_rel
             fly = te[ci] - t_rel[ci]
-            if g0:
-                def vel_c(tq):
-                    tq = np.asarray(tq, dtype=float)
-                    return lo_velocity(tq) - g0 * (tq - tq[:, :1])
-
-                def acc_c(tq):
-                    return lo_acc(tq) - g0
-            else:
-                vel_c, acc_c = lo_velocity, lo_acc
+            vel_c, acc_c = falling_frame(lo_velocity, lo_acc, g0)
             ye_c = ye[ci] - 0.5 * g0 * fly ** 2
             ve_c = v_minus[1:][ci] - g0 * fly
             solc = solve_flights(t_rel[ci], te[ci], y_rel[ci], ye_c, vel_c, acc_c,
