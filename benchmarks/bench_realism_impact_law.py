@@ -35,7 +35,7 @@ law so that the impact law is scored on its own:
   at 1.4 times the speed is honest; one whose band is narrow and wrong is not. The
   target line is the strict share.
 
-Figures are quoted on the ``holdout12`` split (see :mod:`vidiscover.corpus`).
+Figures are quoted on the ``holdout13`` split (see :mod:`vidiscover.corpus`).
 Measured (holdout12, 60 cases, run once, 2026-11-27, at cccbf5f): constant-r walls reported
 constant 1.000 of 61; Hunt-Crossley walls within 0.03 at the third clearance 0.946 of 56
 (027 right rms 0.034, 050 right 0.033 and left 0.037: 050's impacts are timed 0.11 ms
@@ -80,7 +80,7 @@ the sensors or the analysis change.
 
 Usage::
 
-    python benchmarks/bench_realism_impact_law.py [--split holdout12] [--n 60] [--n-boot 200]
+    python benchmarks/bench_realism_impact_law.py [--split holdout13] [--n 60] [--n-boot 200]
         [--cache DIR]
 """
 
@@ -242,7 +242,7 @@ def band_half_width(law, v: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.n
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout12", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout13", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--n-boot", type=int, default=200,

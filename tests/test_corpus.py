@@ -13,7 +13,8 @@ def test_cases_are_a_pure_function_of_split_and_index():
     splits = [{c.params for c in realism_corpus(name, 8)}
               for name in ("dev", "test", "holdout", "holdout2", "holdout3",
                            "holdout4", "holdout5", "holdout6", "holdout7", "holdout8",
-                           "holdout9", "holdout10", "holdout11", "holdout12")]
+                           "holdout9", "holdout10", "holdout11", "holdout12",
+                           "holdout13")]
     for i, one in enumerate(splits):
         assert len(one) == 8
         for other in splits[i + 1:]:
