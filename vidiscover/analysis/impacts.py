@@ -1344,6 +1344,7 @@ _TAIL_AMP = (0.3, 1.0)   # ... may be a late load step: its fitted amplitude ove
 _TAIL_ZETA = (0.05, 0.1, 0.2, 0.35, 0.5)
 _TAIL_RISE_MIN = 2.0     # ... for contacts of at least this many samples (ringing >= 4)
 _TAIL_REL_RISE = 0.25    # ... where a tail is all below this share of the pulse before
+_PAIR_BLOCK = 1 << 20    # (run end, pulse) pairs compared at once by _rest_loads
 _REST_BATCH = 80000      # entries x window samples of the step searches made together
 #: The resting-load search reads its fits from inner products (:func:`_rest_inner`) when
 #: the normalised step stays within this bound (an instrument's step overshoots by tens
@@ -1466,10 +1467,16 @@ def _rest_loads(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
         end = end[end >= 2]
         end = end[(grp[end - 2] == grp[end])
                   & (pos[j[end]] - pos[j[end - 1]] < pos[j[end - 1]] - pos[j[end - 2]])]
-        for i, prev, e in zip(j[end], j[end - 1], end):
-            between = (pos > pos[i]) & (pos < lift[i])
-            if not (np.abs(amp[between]) >= abs(amp[i])).any():
-                cand.append((i, prev, j[:e + 1][grp[:e + 1] == grp[e]]))
+        # no stronger pulse after it before the lift-off (all runs' ends compared at once,
+        # in blocks of about a million pairs); the run's pulses are gathered when needed
+        ie, aa = j[end], np.abs(amp)
+        step = max(1, _PAIR_BLOCK // max(pos.size, 1))
+        free = np.concatenate([~((pos[None, :] > pos[ie[b:b + step], None])
+                                 & (pos[None, :] < lift[ie[b:b + step], None])
+                                 & (aa[None, :] >= aa[ie[b:b + step], None])).any(axis=1)
+                               for b in range(0, ie.size, step)] + [np.zeros(0, dtype=bool)])
+        cand.extend((i, prev, (j, grp, e)) for i, prev, e, ok
+                    in zip(ie, j[end - 1], end, free) if ok)
     h = win // 2
     out, entries, drop = [], [], []
     scratch = None          # y with a tail's weak pulses put back (one copy, restored)
@@ -1478,9 +1485,10 @@ def _rest_loads(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
         (i, lift[i], pos[i] + 0.5,
          min(pos[i] + max(_REST_GAPS * (pos[i] - pos[prev]), 3.0), float(lift[i]) - 1.0,
              pos[i] + h)) for i, prev, _ in cand])
-    for (i, _, run), got in zip(cand, firsts):
+    for (i, _, (jr, grp, e)), got in zip(cand, firsts):
         tail_step = False
         if got is None and late:
+            run = jr[:e + 1][grp[:e + 1] == grp[e]]
             # a late load taken for weak pulses: the step searched from the stronger
             # pulse before them, with them taken out
             a = np.abs(amp[run])
@@ -1541,16 +1549,18 @@ def _rest_scan(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
     pos = fit.pos
     res: list = [None] * len(items)
     groups: dict = {}
+    any_bad = bool(bad.any())
     for m, (i, lift, p_lo, p_hi) in enumerate(items):
         side = 0 if fit.amp[i] >= 0 else 1
-        ci = int(np.clip(np.rint(pos[i]), 0, n - 1))
+        # (np.rint's half-to-even is Python's round; numpy's scalar clip cost 5 us a search)
+        ci = min(max(round(float(pos[i])), 0), n - 1)
         if p_hi <= p_lo:
             continue
         k0, k1 = max(ci - h, 0), min(int(math.ceil(p_hi)) + h, n)
         if k1 - k0 < 12:
             continue
         grid = np.arange(p_lo, p_hi + 1e-9, _REST_STEP)
-        if bad[k0:k1].any():
+        if any_bad and bad[k0:k1].any():
             res[m] = _rest_step(fit, y, base, bad, load_ratio, sigma, h, i, lift, p_lo, p_hi,
                                 None)
             continue
@@ -1573,7 +1583,12 @@ def _rest_scan(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
         # a row of the kernel (and of its cumulative sum) is a function of the entry's
         # fraction of a sample alone: each fraction once (a grid of quarter samples
         # holds about 4 per search), padded with the values before and after it
-        frac, inv = np.unique(grid - fl, return_inverse=True)
+        # (sorted distinct values and a binary search: np.unique's values and inverse,
+        # a third of its time on these small arrays)
+        fv = (grid - fl).ravel()
+        frac = np.sort(fv)
+        frac = frac[np.r_[True, frac[1:] != frac[:-1]]]
+        inv = np.searchsorted(frac, fv)
         jj = np.arange(-H, H + 1, dtype=float)
         g1 = model.kernel(jj[None, :] - frac[:, None], fit.fs)
         # the (n, G, K) rows are windows of the kernel rows, padded with what they are
@@ -1597,8 +1612,10 @@ def _rest_scan(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
         kw = k.astype(float)
         d = kw - pos[ii][:, None]
         kv = model.kernel(np.stack([d, d + 0.25, d - 0.25]), fit.fs)
-        x = (kw - k.mean(axis=1, keepdims=True)) / nk
-        V = np.concatenate([np.vander(x.ravel(), 4).reshape(len(grp), nk, 4),
+        # the cubic's abscissa (kw - mean(kw)) / nk is the same row for every search: the
+        # integer sums and their mean k0 + (nk - 1) / 2 are exact, so is the difference
+        x = (np.arange(nk, dtype=float) - (nk - 1) / 2) / nk
+        V = np.concatenate([np.broadcast_to(np.vander(x, 4), (len(grp), nk, 4)),
                             (kv[0] / pk)[:, :, None], ((kv[1] - kv[2]) / pk)[:, :, None]],
                            axis=2)
         Q = np.linalg.qr(V)[0]
