@@ -594,3 +594,41 @@ def test_a_law_that_moves_between_recordings_is_not_identified():
     two = discover_flight_law([_case(b, 0.1, 1.0)[0] for b in (0.006, 0.009)], n_boot=0)
     _check(two, 0.1, 1.0)
     assert two.diagnostic["jackknife"]["G"] == 2 and two.to_dict()["jackknife"] is None
+
+
+def test_the_contact_placement_joins_the_standard_errors(monkeypatch):
+    """The placement check (:func:`_geometry_shift`: the law's move with the learned
+    contact durations 0.3 times as long) as an uncertainty: half the move joins the fit's
+    standard errors in quadrature, and the totals decide against MAX_MU_SE / MAX_THETA_SE.
+    On the pooled mu 0.1 / theta 1 deg recordings (fit se measured 0.003 / 0.04 deg), a
+    move of -0.02 in mu (1.3 times the bound: refused by the old rule, which bounded the
+    move itself; spent holdout12-010 moved -0.023 with se 0.001 and was right) gives a
+    total of 0.0104: identified, reported with that se; -0.03 gives 0.0153: refused,
+    and so for theta (-0.25 deg -> 0.13 deg identified, -0.32 deg -> 0.166 refused)."""
+    import vidiscover.discovery.flight_law as fl
+    from vidiscover.analysis.flights import FlightData
+
+    recs = [FlightData.of(_case(b, 0.1, 1.0)[0]) for b in CLEARANCES]
+
+    def run(move):
+        monkeypatch.setattr(fl, "_geometry_shift", lambda *a, **k: move)
+        return discover_flight_law(recs, n_boot=0)
+
+    still = run((0.0, 0.0))
+    _check(still, 0.1, 1.0)
+    se_mu, se_th = still.mu_se, still.theta_se
+    assert 0.002 < se_mu < 0.004 and 0.03 < se_th < 0.05
+    res = run((-0.02, 0.05))
+    _check(res, 0.1, 1.0)
+    assert res.mu_se == pytest.approx(math.hypot(se_mu, 0.01), rel=1e-9)
+    assert res.theta_se == pytest.approx(math.hypot(se_th, 0.025), rel=1e-9)
+    assert res.diagnostic["placement"] == {"mu": -0.02, "theta_deg": 0.05, "mu_se": 0.01,
+                                           "theta_se": 0.025}
+    res = run((-0.03, 0.05))
+    _assert_no_numbers(res)
+    assert "where in the contact" in res.reason and "do not determine" not in res.reason
+    assert res.mu_se == pytest.approx(math.hypot(se_mu, 0.015), rel=1e-9)
+    _check(run((0.0, -0.25)), 0.1, 1.0)
+    res = run((0.0, -0.32))
+    _assert_no_numbers(res)
+    assert "where in the contact" in res.reason and res.theta_se > MAX_THETA_SE

@@ -79,8 +79,10 @@ reads as a wider clearance, less friction), and on holdout6 0-29 that time is of
 the rows (:meth:`_Tents.depth_columns`, projected off like the free jump gains). The
 learned durations are not exact either (Hunt-Crossley walls' are learned 27-65 % too
 long, once 3.6 times): the (constant, friction) fixed point is recomputed with them
-:data:`_TAU_SCALE` times as long, and when that moves mu by more than
-:data:`MAX_MU_SE` or theta by more than :data:`MAX_THETA_SE` the law is not identified.
+:data:`_TAU_SCALE` times as long. Half that move (:data:`_PLACEMENT_SHARE`: the move with
+the durations 1.54 times too long, the typical error) is the placement's standard
+uncertainty; it joins the fit's standard errors (in quadrature), and the law is not
+identified when the totals exceed :data:`MAX_MU_SE` or :data:`MAX_THETA_SE`.
 
 **Admissibility.** Candidate laws with mu < 0 are not considered (the selection is
 constrained to mu >= 0): where the free fit lands slightly below zero, the law
@@ -233,6 +235,18 @@ _STARTS = ((0.0, 0.0), (0.3, 2.0), (0.3, -2.0))
 #: 0.67 b), Kelvin-Voigt ones within 7 % (-001/-009); the law must hold with them 0.3
 #: times as long.
 _TAU_SCALE = 0.3
+#: Standard uncertainty of the contact placement, as a share of the law's move with the
+#: durations ``_TAU_SCALE`` times as long (:func:`_geometry_shift`). The move is linear in
+#: the durations' factor (median move at 0.65 over that at 0.3: 0.500 for mu, 10-90 %
+#: 0.49-0.50, on 98 cached spent cases), so 0.5 is the move at 0.65: the durations
+#: learned 1.54 times too long, the middle of the measured 1.27-1.65. It joins the fit's
+#: standard errors, ``se_total = hypot(se, 0.5 |move|)``, which decide against
+#: :data:`MAX_MU_SE` and :data:`MAX_THETA_SE` and are reported. Before, the move itself
+#: had to be within those bounds (a 3-times error taken as a 1-sigma one). Spent splits
+#: test, dev, holdout6-12 (cached analyses, flight23), identified right / wrong: 30 / 1
+#: -> 35 / 1 (test-048, holdout10-017, holdout12-010, -023, -037 won; none lost; the wrong
+#: law is holdout10-036 in both). All spent splits served for tuning: simple on purpose.
+_PLACEMENT_SHARE = 0.5
 #: With the penetration depths free (``penetration="free"``) the same factor: the test
 #: then probes the centroids' times. Measured with the depths free on cached analyses
 #: (identified / wrong): 0.3 -> test 3/0; 0.5 -> test 4/0, dev 0/0, holdout6 4/0,
@@ -330,7 +344,10 @@ class FlightLawResult:
         causal anti-alias filters and compliant walls.
     mu_se, theta_se : float
         Standard errors of mu and theta (deg) from the (constant, friction) fit,
-        with the residual scale at least the jumps' precision. Above
+        with the residual scale at least the jumps' precision, and (compliant
+        contacts) the contact placement's uncertainty in quadrature
+        (``diagnostic["placement"]``: the move with the learned durations
+        :data:`_TAU_SCALE` times as long, and half of it as a standard error). Above
         :data:`MAX_MU_SE` or :data:`MAX_THETA_SE` the flights do not determine
         that parameter: not identified.
     warnings : tuple of str
@@ -1345,17 +1362,40 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
             f"chi2 {hausman:.3g} > {_HAUSMAN:g})")
     shift = _geometry_shift(entries, library, (best[0], best[1]), jc, jf, max_iter,
                             gain_sd=gain_sd, gain_per=jump_gain_per, depth_free=depth_free)
-    if shift is not None and (abs(shift[0]) > MAX_MU_SE or abs(shift[1]) > MAX_THETA_SE):
-        taus = sorted({round(float(t) * 1e6) for rec in entries for t in np.unique(rec.tau)})
-        reasons.append(
-            f"the law depends on where in the contact the impact is placed: with the "
-            f"learned contact durations ({'/'.join(map(str, taus))} us) {1 - _TAU_SCALE:.0%} "
-            f"shorter it moves by {shift[0]:+.2g} in mu and {shift[1]:+.2g} deg in theta "
-            "(compliant walls; the analysis does not place the impacts that precisely)")
+    # the placement's own uncertainty joins the fit's: the law is identified when the
+    # total standard errors are within MAX_MU_SE / MAX_THETA_SE (:data:`_PLACEMENT_SHARE`);
+    # with the depths free the move itself is bounded, as before (the fold identified the
+    # unit test's instantaneous impacts told of 1 ms contacts at mu 0.132 for 0.1)
+    fit_se = (mu_se, theta_se)
+    if shift is not None:
+        share = 1.0 if depth_free else _PLACEMENT_SHARE
+        place = (share * abs(shift[0]), share * abs(shift[1]))
+        total = ((max(mu_se, place[0]), max(theta_se, place[1])) if depth_free
+                 else (math.hypot(mu_se, place[0]), math.hypot(theta_se, place[1])))
+        diagnostic["placement"] = {"mu": float(shift[0]), "theta_deg": float(shift[1]),
+                                   "mu_se": place[0], "theta_se": place[1]}
+        # refused here where the fit's own errors pass (else said above)
+        if ((place[0] > MAX_MU_SE or total[0] > MAX_MU_SE >= mu_se)
+                or (place[1] > MAX_THETA_SE or total[1] > MAX_THETA_SE >= theta_se)):
+            taus = sorted({round(float(t) * 1e6) for rec in entries
+                           for t in np.unique(rec.tau)})
+            reasons.append(
+                f"the law depends on where in the contact the impact is placed: with the "
+                f"learned contact durations ({'/'.join(map(str, taus))} us) "
+                f"{1 - _TAU_SCALE:.0%} shorter it moves by {shift[0]:+.2g} in mu and "
+                f"{shift[1]:+.2g} deg in theta, standard errors with the placement "
+                f"{total[0]:.2g} and {total[1]:.2g} deg > {MAX_MU_SE:g} or {MAX_THETA_SE:g} "
+                "deg (compliant walls; the analysis does not place the impacts that "
+                "precisely)")
+        if not depth_free:
+            mu_se, theta_se = total
     mu_free = _mu_theta((_CONSTANT, _FRICTION), unconstrained)[0]
-    if _CONSTRAINED and _negative_friction(mu_free, mu_se):
+    # the fit's own error: the placement moves mu one way (shorter contacts, less
+    # friction), it does not excuse a fit below zero
+    if _CONSTRAINED and _negative_friction(mu_free, fit_se[0]):
         reasons.append(f"the fit wants a negative friction, mu = {mu_free:.3g} (beyond twice "
-                       f"its standard error {mu_se:.2g}): mu >= 0 does not close the tents")
+                       f"its standard error {fit_se[0]:.2g}): mu >= 0 does not close the "
+                       "tents")
     if mu < 0:
         reasons.append(f"inadmissible friction mu = {mu:.3g} < 0 (the friction term has "
                        "the wrong sign)")
