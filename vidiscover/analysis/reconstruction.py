@@ -309,7 +309,13 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
     dt = 1.0 / fs
     V_s = np.empty(n)
     V_s[0] = 0.0
-    np.cumsum(0.5 * (a[1:] + a[:-1]) * dt, out=V_s[1:])
+    # (0.5 (a[1:] + a[:-1]) dt made in V_s itself: the same operations, no temporaries)
+    vs = V_s[1:]
+    np.add(a[1:], a[:-1], out=vs)
+    np.multiply(0.5, vs, out=vs)
+    np.multiply(vs, dt, out=vs)
+    np.cumsum(vs, out=vs)
+    del vs
     ti = t_imp - t[0]
     # states at the impacts: linear interpolation between the samples about them
     # (taken from each full-length array as soon as it is made, so it can be dropped)
@@ -339,9 +345,13 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
         xs = np.empty(hi - lo)
         if lo == 0:
             xs[0] = 0.0
-            xs[1:] = 0.5 * (V_s[1:hi] + V_s[:hi - 1]) * dt
+            np.add(V_s[1:hi], V_s[:hi - 1], out=xs[1:])
         else:
-            xs[:] = 0.5 * (V_s[lo:hi] + V_s[lo - 1:hi - 1]) * dt
+            np.add(V_s[lo:hi], V_s[lo - 1:hi - 1], out=xs)
+        # (0.5 (..) dt in place: the same operations; 0 stays 0 in the first part)
+        np.multiply(0.5, xs, out=xs)
+        np.multiply(xs, dt, out=xs)
+        if lo:
             xs[0] += carry
         np.cumsum(xs, out=xs)
         carry = xs[-1]
@@ -490,7 +500,8 @@ def _drift(tr, xl, x_raw, ok, fs, window):
     step = B * 4096
     for lo in range(0, cut, step):
         hi = min(lo + step, cut)
-        eb[lo // B:hi // B] = (e(lo, hi) * ok[lo:hi]).reshape(-1, B).sum(axis=1)
+        # (e is 0 off the ok samples already: the same sums as e * ok)
+        eb[lo // B:hi // B] = e(lo, hi).reshape(-1, B).sum(axis=1)
     cb = ok[:cut].reshape(nb, B).sum(axis=1)
     tb = tr[:cut].reshape(nb, B).mean(axis=1)
     # the last n - cut samples (fewer than a block) make no block of their own: the

@@ -237,7 +237,7 @@ def estimate_restitution(recon: Reconstruction, det: ImpactDetection | None = No
     status[kind_out == "stick"] = "sticks"
     status[(f_in < 0) | (f_out < 0)] = "edge"
     used = status == "ok"
-    rng = np.random.default_rng(seed)
+    rng = np.random.default_rng(seed) if n_boot else None      # (made only when drawn)
     walls = {}
     for name, s in (("right", 1.0), ("left", -1.0)):
         sel = used & (sgn == s)
@@ -269,7 +269,9 @@ def _wall_stats(name, r, n_total, rho, slow_ratio, n_boot, level, rng) -> WallSt
                                                for k in range(0, idx.shape[0], step)])))
         q = (1 - level) / 2
         lo, hi = (_quantile_sorted(boot, p) for p in (q, 1 - q))
-    ratio = float(np.nanmedian(rho)) if np.isfinite(rho).any() else 0.0
+    # (np.nanmedian's value: the median of the values that are not NaN; its masked-array
+    # path for small arrays cost 5 times as much)
+    ratio = float(np.median(rho[~np.isnan(rho)])) if np.isfinite(rho).any() else 0.0
     return WallStats(name, n, n_total, float(np.mean(r)), float(np.median(r)), rms,
                      float(np.std(r, ddof=1)) if n >= 2 else nan, lo, hi, ratio,
                      bool(ratio > slow_ratio))
