@@ -624,6 +624,11 @@ def test_the_contact_placement_joins_the_standard_errors(monkeypatch):
     assert res.theta_se == pytest.approx(math.hypot(se_th, 0.025), rel=1e-9)
     assert res.diagnostic["placement"] == {"mu": -0.02, "theta_deg": 0.05, "mu_se": 0.01,
                                            "theta_se": 0.025}
+    # ... and discovery.json carries it beside the totals
+    js = res.to_dict()
+    assert js["placement"] == res.diagnostic["placement"]
+    assert js["mu_se"] == pytest.approx(res.mu_se) and still.to_dict()["placement"] == {
+        "mu": 0.0, "theta_deg": 0.0, "mu_se": 0.0, "theta_se": 0.0}
     res = run((-0.03, 0.05))
     _assert_no_numbers(res)
     assert "where in the contact" in res.reason and "do not determine" not in res.reason

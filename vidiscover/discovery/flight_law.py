@@ -442,6 +442,7 @@ class FlightLawResult:
         jk = None if not jk or jk.get("G", 0) < 3 else {
             "n_recordings": int(jk["G"]), "mu_se": _num(jk["mu_se"]),
             "theta_se": _num(jk["theta_se"])}
+        place = diag.get("placement")
         return {"identified": bool(self.identified), "reason": self.reason,
                 "mu": _num(self.mu), "theta_deg": _num(self.theta_deg),
                 "terms": list(self.terms),
@@ -460,6 +461,8 @@ class FlightLawResult:
                 "precision": _num(self.precision),
                 "mu_se": _num(self.mu_se), "theta_se": _num(self.theta_se),
                 "warnings": list(self.warnings), "jackknife": jk,
+                "placement": None if place is None else {
+                    k: _num(place[k]) for k in ("mu", "theta_deg", "mu_se", "theta_se")},
                 "diagnostic_fit": {
                     "mu": _num(diag.get("mu", math.nan)),
                     "theta_deg": _num(diag.get("theta_deg", math.nan)),
