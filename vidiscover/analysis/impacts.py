@@ -98,7 +98,7 @@ from dataclasses import dataclass, field, replace
 from typing import TYPE_CHECKING
 
 import numpy as np
-from numpy.lib.stride_tricks import sliding_window_view
+from numpy.lib.stride_tricks import as_strided
 
 from ..errors import InputError
 from ..params import G_ACCEL
@@ -1587,10 +1587,17 @@ def _rest_scan(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
         # a third of its time on these small arrays)
         fv = (grid - fl).ravel()
         frac = np.sort(fv)
-        frac = frac[np.r_[True, frac[1:] != frac[:-1]]]
+        frac = frac[np.concatenate(([True], frac[1:] != frac[:-1]))]
         inv = np.searchsorted(frac, fv)
         jj = np.arange(-H, H + 1, dtype=float)
-        g1 = model.kernel(jj[None, :] - frac[:, None], fit.fs)
+        # the kernel rows and the last pulse's columns (below) in one call: the kernel
+        # is elementwise in its offsets
+        kw = k.astype(float)
+        d = (kw - pos[ii][:, None]).ravel()
+        kr = model.kernel(np.concatenate([(jj[None, :] - frac[:, None]).ravel(), d,
+                                          d + 0.25, d - 0.25]), fit.fs)
+        g1 = kr[:frac.size * (2 * H + 1)].reshape(frac.size, 2 * H + 1)
+        kv = kr[g1.size:].reshape(3, len(grp), nk)
         # the (n, G, K) rows are windows of the kernel rows, padded with what they are
         # before (0) and after (0 for the kernel, 1 for the normalised step): the window
         # of an entry at floor e starts at k0 - e + H of the row (k0 its first sample)
@@ -1600,18 +1607,18 @@ def _rest_scan(fit: _Fitter, y: np.ndarray, base: np.ndarray, bad: np.ndarray,
         w0 = lo + 2 * H + 1 + hi
         gp = np.zeros((frac.size, w0))
         gp[:, lo:lo + 2 * H + 1] = g1
+        gp /= pk                # (the rows divided before they are gathered: same values)
         cp = np.ones((frac.size, w0))
         cp[:, :lo] = 0.0
         cp[:, lo:lo + 2 * H + 1] = _cum_step(g1)
         row = inv.reshape(grid.shape)
         load = -load_ratio * base[k] * (k < lift[:, None])
-        P = sliding_window_view(gp, nk, axis=1)[row, off + lo]
-        P /= pk
-        Tw = sliding_window_view(cp, nk, axis=1)[row, off + lo]
+        # (sliding_window_view's windows, made directly)
+        P = as_strided(gp, (frac.size, w0 - nk + 1, nk), gp.strides + gp.strides[1:],
+                       writeable=False)[row, off + lo]
+        Tw = as_strided(cp, (frac.size, w0 - nk + 1, nk), cp.strides + cp.strides[1:],
+                        writeable=False)[row, off + lo]
         Tw *= load[:, None, :]
-        kw = k.astype(float)
-        d = kw - pos[ii][:, None]
-        kv = model.kernel(np.stack([d, d + 0.25, d - 0.25]), fit.fs)
         # the cubic's abscissa (kw - mean(kw)) / nk is the same row for every search: the
         # integer sums and their mean k0 + (nk - 1) / 2 are exact, so is the difference
         x = (np.arange(nk, dtype=float) - (nk - 1) / 2) / nk
@@ -1669,13 +1676,15 @@ def _rest_inner(P: np.ndarray, Tw: np.ndarray, Q: np.ndarray, y0: np.ndarray):
     aa = pp - np.einsum("ngc,ngc->ng", qp, qp)
     at = np.einsum("ngw,ngw->ng", P, Tw) - np.einsum("ngc,ngc->ng", qp, qt)
     tt = tw2 - np.einsum("ngc,ngc->ng", qt, qt)
-    ill = ((aa <= _REST_ILL * pp) | (tt <= _REST_ILL * tw2)).any(axis=1)
-    na = np.sqrt(np.where(aa > _REST_ILL * pp, aa, 1.0))
+    ipp = _REST_ILL * pp
+    ill = ((aa <= ipp) | (tt <= _REST_ILL * tw2)).any(axis=1)
+    na = np.sqrt(np.where(aa > ipp, aa, 1.0))
     uy, ut, ty = PM[..., -1] / na, at / na, TM[..., -1]
     rss = (np.einsum("nw,nw->n", y0, y0)[:, None] - 2.0 * ty + tt) - (uy - ut) ** 2
-    gains = 2.0 * ty - tt - 2.0 * uy * ut + ut ** 2
-    ill |= ~np.isfinite(rss).all(axis=1) | ~np.isfinite(gains).all(axis=1)
-    return gains, tt - ut ** 2, rss, ill
+    ut2 = ut ** 2
+    gains = 2.0 * ty - tt - 2.0 * uy * ut + ut2
+    ill |= ~(np.isfinite(rss).all(axis=1) & np.isfinite(gains).all(axis=1))
+    return gains, tt - ut2, rss, ill
 
 
 def _rest_projected(P: np.ndarray, Tw: np.ndarray, Q: np.ndarray, Qt: np.ndarray,
@@ -1992,7 +2001,7 @@ def _candidates(z: np.ndarray, threshold: float, rel: float = 0.0, near=None,
     # ties (equal neighbours): keep the first
     idx = above[keep]
     if idx.size > 1:
-        idx = idx[np.r_[True, np.diff(idx) > 2]]
+        idx = idx[np.concatenate(([True], np.diff(idx) > 2))]
     if idx.size == 0:
         return idx
     vi = az[idx]
@@ -2845,7 +2854,9 @@ def _alternation_check(table: dict, base: np.ndarray, mu: float,
     same = np.flatnonzero(side[1:] == side[:-1])
     if same.size == 0:
         return ok
-    cs = np.concatenate([[0.0], np.cumsum(base)])
+    cs = np.empty(base.size + 1)          # (0, then the running sum: one array)
+    cs[0] = 0.0
+    np.cumsum(base, out=cs[1:])
     lo, hi = c[same], np.maximum(c[same + 1], c[same] + 1)
     mean_acc = (cs[hi] - cs[lo]) / (hi - lo)
     tol = 3 * sigma / np.sqrt(hi - lo) + mu * G_ACCEL
