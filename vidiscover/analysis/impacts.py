@@ -2122,8 +2122,12 @@ class _Fitter:
                 if rows.size == 0:
                     continue
                 lim = model.span(self.fs) + 8
+                inside = np.abs(j) <= lim
+                if inside.all():                # (the usual case: no clip, no masked copy)
+                    out[rows] = model.rows(j, delta[rows], self.fs)
+                    continue
                 K = model.rows(np.clip(j, -lim, lim), delta[rows], self.fs)
-                out[rows] = np.where(np.abs(j) <= lim, K, 0.0)
+                out[rows] = np.where(inside, K, 0.0)
         return out
 
     def matched(self, resid: np.ndarray) -> np.ndarray:
@@ -2833,7 +2837,10 @@ def _fit_windows(Y, W, grid, basis, Qm, pulse, fs, jl):
     delta = np.where((g == 0) | (g == G - 1), grid[g], delta)
     # area at the refined delay: weighted least squares on (kernel, 1, j)
     K = pulse.rows(jl, delta, fs)
-    B = np.stack([K, np.ones_like(K), np.broadcast_to(jl.astype(float), K.shape)], axis=-1)
+    B = np.empty(K.shape + (3,))        # (kernel, 1, j) filled in place: no temporaries
+    B[..., 0] = K
+    B[..., 1] = 1.0
+    B[..., 2] = jl
     Bw = B * W[..., None]
     M = np.einsum("nwk,nwl->nkl", Bw, B)
     tr = np.trace(M, axis1=-2, axis2=-1)[..., None, None]
