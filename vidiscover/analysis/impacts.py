@@ -2770,6 +2770,8 @@ class _Fitter:
         win = c[:, None] + self.jl[None, :]
         main = c[:, None] + _CENTRE[None, :]
         bad = clip | nan
+        none = np.zeros(self.n, dtype=bool)     # (no gather where no sample is flagged)
+        any_clip, any_nan = bool(clip.any()), bool(nan.any())
         return {
             "t": t0 + self.pos / fs - self.side_value(delays) - self.pulse_value(self.v_shift),
             "side": np.where(self.amp > 0, "right", "left"),
@@ -2778,9 +2780,10 @@ class _Fitter:
             "snr": self.snr(sigma),
             "peak": self.amp * self.pulse_value(self.v_peak),
             "sample": np.clip(c, 0, n - 1),
-            "reliable": ~_take(bad, main, False).any(axis=1),
-            "clipped": _take(clip, win, False).any(axis=1),
-            "dropout": _take(nan, win, False).any(axis=1),
+            "reliable": (~_take(bad, main, False).any(axis=1) if any_clip or any_nan
+                         else ~none),
+            "clipped": _take(clip, win, False).any(axis=1) if any_clip else none.copy(),
+            "dropout": _take(nan, win, False).any(axis=1) if any_nan else none.copy(),
             "side_check": np.ones(self.n, dtype=bool),
             "merged": self._misfit(_take(resid, win, 0.0), sigma, model_error),
         }
