@@ -22,6 +22,7 @@ from vidiscover.acquisition import (
     contact_shape,
     dc_group_delay,
     kelvin_voigt_shape,
+    max_cutoff,
     pulse_response,
     pulse_responses,
 )
@@ -48,6 +49,32 @@ def test_causal_response_is_scipys_impulse_response(kind, order):
     g = pulse_response(t, kind, order, 0.3, 0.0)
     assert np.abs(g - h).max() < 1e-9 * np.abs(h).max() + 1e-12
     assert np.all(pulse_response(-t[1:], kind, order, 0.3, 0.0) == 0)
+
+
+@pytest.mark.parametrize("order", range(2, 9))
+def test_bessel_cutoff_limit_puts_its_minus_3_db_point_at_the_nyquist_frequency(order):
+    # anti-alias Bessels are specified by their -3 dB point (scipy's norm="mag"); ours
+    # are phase-normalised, so one at 0.5 fs "-3 dB" lies beyond 0.5 fs here
+    c = max_cutoff("bessel", order)
+    _, h = signal.freqs(*_analog("bessel", order, c), [2 * np.pi * 0.5])
+    assert abs(h[0]) ** 2 == pytest.approx(0.5, abs=1e-9)
+    pm = signal.bessel(order, 2 * np.pi * 0.5, analog=True, norm="mag", output="zpk")[1]
+    pp = signal.bessel(order, 2 * np.pi * c, analog=True, norm="phase", output="zpk")[1]
+    assert np.allclose(np.sort_complex(pm), np.sort_complex(pp), rtol=1e-8)
+    assert max_cutoff("butter", order) == max_cutoff("cheby1", order) == 0.5
+
+
+def test_a_bessel_cutoff_may_pass_the_nyquist_frequency_up_to_its_limit_only():
+    m = PulseModel(0.7, kind="bessel", order=4)        # -3 dB at 0.46 fs
+    t = np.arange(0, 400) / 16.0
+    assert np.sum(m.response(t / 6400.0, 6400.0)) / 16.0 / 6400.0 == pytest.approx(1.0, abs=2e-3)
+    for kind, order, c in [("bessel", 4, 0.76), ("bessel", 2, 0.64), ("butter", 4, 0.5),
+                           ("cheby1", 8, 0.6), ("linear-phase", 0, 0.5)]:
+        with pytest.raises(InputError, match=r"cutoff must be in \(0, 0\.[0-9]+\)") as e:
+            PulseModel(c, kind=kind, order=order)
+        assert "\n" not in str(e.value)
+    with pytest.raises(InputError, match="bessel-4 .* Nyquist"):
+        pulse_response(t, "bessel", 4, 0.76, 0.0)
 
 
 @pytest.mark.parametrize("kind,order", [("butter", 4), ("bessel", 6), ("cheby1", 3)])

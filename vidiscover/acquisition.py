@@ -40,7 +40,7 @@ from .errors import InputError
 
 __all__ = ["FILTER_KINDS", "CAUSAL_KINDS", "CHEBY1_RIPPLE_DB", "pulse_kernel", "pulse_response",
            "pulse_responses", "contact_shape", "kelvin_voigt_shape", "shape_centroid",
-           "dc_group_delay", "check_filter"]
+           "dc_group_delay", "check_filter", "max_cutoff"]
 
 #: Anti-alias filter kinds (``--anti-alias KIND:ORDER:CUTOFF_HZ``; the README's
 #: 'Realistic recordings').
@@ -65,15 +65,48 @@ def check_filter(kind: str, order: int, cutoff: float) -> None:
     order : int
         Filter order, 2-8 for the causal kinds (ignored for ``linear-phase``).
     cutoff : float
-        Cut-off as a fraction of the sampling rate, in (0, 0.5).
+        Cut-off as a fraction of the sampling rate, in (0, :func:`max_cutoff`): 0.5,
+        or for ``bessel`` up to where its -3 dB point reaches the Nyquist frequency.
     """
     if kind not in FILTER_KINDS:
         raise InputError(f"anti-alias kind must be one of {', '.join(FILTER_KINDS)}, "
                          f"was {kind!r}")
     if kind in CAUSAL_KINDS and not (isinstance(order, (int, np.integer)) and 2 <= order <= 8):
         raise InputError(f"anti-alias order must be an integer in [2, 8], was {order!r}")
-    if not (isinstance(cutoff, (int, float, np.floating)) and 0 < cutoff < 0.5):
-        raise InputError(f"cutoff must be in (0, 0.5) of the sampling rate, was {cutoff!r}")
+    hi = max_cutoff(kind, order)
+    if not (isinstance(cutoff, (int, float, np.floating)) and 0 < cutoff < hi):
+        what = (f"(0, {hi:.4f}) of the sampling rate for {kind}-{order} (its -3 dB point "
+                f"below the Nyquist frequency)" if hi != 0.5 else "(0, 0.5) of the sampling rate")
+        raise InputError(f"cutoff must be in {what}, was {cutoff!r}")
+
+
+def max_cutoff(kind: str, order: int) -> float:
+    """Largest cut-off (fraction of the sampling rate, exclusive) of a filter family.
+
+    0.5 (the Nyquist frequency) for every kind but ``bessel``: its phase-normalised
+    cut-off lies above its -3 dB point (by 1.27x at order 2 to 1.93x at order 8), and
+    anti-alias Bessels are specified by the -3 dB point, which may lie near the
+    Nyquist frequency (a Bessel-4 "at 2800 Hz" sampled at 6400 Hz is 0.66 fs here).
+    Its limit is the cut-off whose -3 dB point is the Nyquist frequency.
+    """
+    if kind != "bessel" or not (isinstance(order, (int, np.integer)) and 2 <= order <= 8):
+        return 0.5
+    return 0.5 / _bessel_3db(int(order))
+
+
+@functools.cache
+def _bessel_3db(order: int) -> float:
+    """-3 dB frequency of the phase-normalised Bessel low-pass, in units of its cut-off."""
+    p, _ = _unit_poles("bessel", order)                # cut-off 1 rad/sample
+
+    def gain2(w):
+        return float(np.prod(np.abs(p) ** 2 / np.abs(1j * w - p) ** 2))
+
+    lo, hi = 0.1, 1.0                                  # gain2 falls monotonically
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if gain2(mid) > 0.5 else (lo, mid)
+    return 0.5 * (lo + hi)
 
 
 def pulse_kernel(dt_samples: np.ndarray, sample_rate: float, cutoff: float, tau: float,

@@ -74,6 +74,7 @@ from ..acquisition import (
     check_filter,
     dc_group_delay,
     kelvin_voigt_shape,
+    max_cutoff,
     pulse_response,
     pulse_responses,
     shape_centroid,
@@ -114,7 +115,9 @@ class PulseModel:
     Parameters
     ----------
     cutoff : float
-        Low-pass cut-off as a fraction of the sampling rate, in (0, 0.5).
+        Low-pass cut-off as a fraction of the sampling rate, in (0, 0.5); for
+        ``bessel`` (phase-normalised) up to where its -3 dB point reaches the Nyquist
+        frequency (:func:`vidiscover.acquisition.max_cutoff`).
     halfwidth : int
         Half-width of the linear-phase kernel (samples).
     tau : float
@@ -145,9 +148,9 @@ class PulseModel:
     mount_zeta: float = 0.02
 
     def __post_init__(self) -> None:
-        if not (isinstance(self.cutoff, (int, float, np.floating)) and 0 < self.cutoff < 0.5):
-            raise InputError(f"cutoff must be in (0, 0.5) of the sampling rate, "
-                             f"was {self.cutoff!r}")
+        if not (isinstance(self.cutoff, (int, float, np.floating)) and 0 < self.cutoff
+                < max_cutoff(self.kind, self.order)):
+            check_filter(self.kind, self.order, self.cutoff)
         if not (isinstance(self.halfwidth, (int, np.integer)) and 4 <= self.halfwidth <= 256):
             raise InputError(f"halfwidth must be an integer in [4, 256] samples, "
                              f"was {self.halfwidth!r}")
@@ -488,6 +491,9 @@ _SHAPE_MIN_SAMPLES = 1.0        # ... and its contact lasts at least this many s
 _COARSE_SHAPES = (("arch", 0.0), ("arch", 2.5), ("kelvin-voigt", 0.35))
 _MIN_WALL = 4                   # pulses a wall needs for its own contact duration
 _TWO_WALLS = 1.1                # ... and the misfit of one shared duration must exceed its own
+_BEYOND_GAIN = 1.25             # a Bessel cut-off beyond 0.5 fs is kept when it cuts the misfit
+#                                 by this (P02: 1.74; the 3 of 480 dev/test/holdout7-12 cases
+#                                 that searched beyond gained 1.001-1.015, noise)
 _RES = 10                       # shift grid points per sample at 6400 Hz ...
 _HALF = 2.0                     # ... over +/- this many samples about the centroid
 
@@ -790,14 +796,16 @@ def _shape_params(family: str, h: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _refine(obj: _Objective, kind: str, order: int, c0: float, tr: float, tl: float,
-            two: bool, halfwidth: int, dl: float, shape: tuple | None = None):
+            two: bool, halfwidth: int, dl: float, shape: tuple | None = None,
+            top: float = 0.49):
     """Coarse to fine: grids of 5 x 5 about the best point, halved six times.
 
     A grid whose best point lies on its edge is moved there without halving (the
     valley of (cut-off, tau) runs diagonally), up to 12 grids in all. With ``shape``
     ``(family, h_right, h_left)`` the contact shapes of that family (:data:`_SHAPES`)
     are refined too (3 values per wall and grid). Returns (residual energy, cut-off,
-    right tau, left tau, right h, left h); taus in samples.
+    right tau, left tau, right h, left h); taus in samples. The cut-off stays within
+    [0.02, ``top``].
     """
     dt = 0.2e-3 * obj.fs
     family, hr, hl = shape if shape is not None else ("arch", 0.0, 0.0)
@@ -805,7 +813,7 @@ def _refine(obj: _Objective, kind: str, order: int, c0: float, tr: float, tl: fl
     dh = dh if shape is not None else 0.0
     halved = 0
     for _ in range(12 if shape is None else 16):
-        cs = np.clip(c0 * np.exp(np.linspace(-dl, dl, 5)), 0.02, 0.49)
+        cs = np.clip(c0 * np.exp(np.linspace(-dl, dl, 5)), 0.02, top)
         cols = []
         for t0, h0 in ((tr, hr), (tl, hl)):
             tg = np.maximum(t0 + np.linspace(-dt, dt, 5), 0.0)
@@ -824,7 +832,7 @@ def _refine(obj: _Objective, kind: str, order: int, c0: float, tr: float, tl: fl
         tr, hr = float(cols[0][0][br]), float(cols[0][1][br])
         tl, hl = float(cols[1][0][bl]), float(cols[1][1][bl])
         nh = cols[0][1].size // 5
-        edge = (a in (0, 4) and 0.02 < c0 < 0.49) or any(
+        edge = (a in (0, 4) and 0.02 < c0 < top) or any(
             k // nh in (0, 4) and t0 > 0 for k, t0 in ((br, tr), (bl, tl))) or any(
             nh > 1 and k % nh in (0, nh - 1) and t0 > 0 and lo_h < h0 < hi_h
             for k, t0, h0 in ((br, tr, hr), (bl, tl, hl)))
@@ -836,7 +844,8 @@ def _refine(obj: _Objective, kind: str, order: int, c0: float, tr: float, tl: fl
     return e, c0, tr, tl, (hr if tr > 0 else 0.0), (hl if tl > 0 else 0.0)
 
 
-def _search(obj: _Objective, kinds, fs: float, halfwidth: int, wide: bool = False):
+def _search(obj: _Objective, kinds, fs: float, halfwidth: int, wide: bool = False,
+            beyond: bool = False):
     """Best (right, left) model pairs, least misfit first.
 
     Every family (kind and order) on a coarse grid of cut-offs, contact durations
@@ -850,21 +859,42 @@ def _search(obj: _Objective, kinds, fs: float, halfwidth: int, wide: bool = Fals
     force decaying like an exponential: one more real pole of the filter, not a
     contact), the search is made again ``wide``: every family's coarse grid with
     every shape, each kind's best two refined, and such a contact not kept.
+
+    Cut-offs stay below the Nyquist frequency (0.48 on the coarse grid, 0.49 refined).
+    A Bessel specified by its -3 dB point near the Nyquist frequency lies beyond that
+    in our phase-normalised convention (independent P02: Bessel-4 "2800 Hz" at 6400 Hz
+    is 0.66 fs). When the best model is a Bessel at the top of the range, the Bessels
+    are searched again ``beyond`` it, up to 0.96 (coarse) and 0.98 (refined) of
+    :func:`~vidiscover.acquisition.max_cutoff`, and kept when they fit clearly better
+    (:data:`_BEYOND_GAIN`): the wider range alone also lets a Bessel with a high
+    cut-off and a longer contact imitate in-range filters (dev-003, dev-048: their
+    entries 20-30 us later).
     """
     cutoffs = np.geomspace(0.08, 0.48, 12)
     taus = fs * np.array([0.0, 0.03, 0.08, 0.15, 0.25, 0.4, 0.6, 1.0]) * 1e-3     # samples
     shapes = [(f, h, *(_SHAPES[f][2](h))) for f, h in _COARSE_SHAPES]
     two = obj.two_walls
+    dl = math.log(cutoffs[1] / cutoffs[0])
 
     def coarse_grid(kind, order, ks):
         cols = [(t, k) for t in taus for k in ks]
         T = np.array([t for t, _ in cols])
         SK = np.array([shapes[k][2] for _, k in cols])
         PH = np.array([shapes[k][3] for _, k in cols])
-        R = obj.grid(kind, order, cutoffs, T, obj.groups, halfwidth, SK, PH,
+        cs = family_cutoffs(kind, order)
+        R = obj.grid(kind, order, cs, T, obj.groups, halfwidth, SK, PH,
                      stride=_COARSE_STRIDE)
         e, a, br, bl = _best_cell(R, two)
-        return (e, float(cutoffs[a]), T[br], T[bl], cols[br][1], cols[bl][1])
+        return (e, float(cs[a]), T[br], T[bl], cols[br][1], cols[bl][1])
+
+    def family_cutoffs(kind, order):
+        # a Bessel's cut-off (phase-normalised) lies above its -3 dB point, which may
+        # reach the Nyquist frequency (independent P02: Bessel-4 "2800 Hz" at 6400 Hz,
+        # 0.66 fs here): beyond, the grid goes on in the same steps to 0.96 of its limit
+        top = 0.96 * max_cutoff(kind, order) if beyond else 0.48
+        n = int(math.floor(math.log(top / cutoffs[-1]) / dl + 1e-9)) if top > 0.48 else 0
+        return cutoffs if n <= 0 else np.concatenate(
+            [cutoffs, cutoffs[-1] * np.exp(dl * np.arange(1, n + 1))])
 
     # every family with the half-sine, then the best few with the other shapes too
     # (wide: all of them; ranked by the half-sine alone, a steep family behind a
@@ -875,7 +905,6 @@ def _search(obj: _Objective, kinds, fs: float, halfwidth: int, wide: bool = Fals
     for fam in sorted(coarse, key=coarse.get)[:None if wide else _COARSE_SHAPED]:
         coarse[fam] = min(coarse[fam], coarse_grid(*fam, range(len(shapes))))
     results = []
-    dl = math.log(cutoffs[1] / cutoffs[0])
     ranked = sorted(coarse, key=coarse.get)
     chosen = ranked[:_REFINE]
     within = math.inf if wide else _PER_KIND_WITHIN * coarse[ranked[0]][0]
@@ -884,11 +913,13 @@ def _search(obj: _Objective, kinds, fs: float, halfwidth: int, wide: bool = Fals
                    and coarse[fam][0] <= within][:2 if wide else _PER_KIND]
     for rank, (kind, order) in enumerate(chosen):
         _, c0, tr0, tl0, kr, kl = coarse[kind, order]
-        e, c, tr, tl, _, _ = _refine(obj, kind, order, c0, tr0, tl0, two, halfwidth, dl)
+        top = 0.98 * (max_cutoff(kind, order) if beyond else 0.5)
+        e, c, tr, tl, _, _ = _refine(obj, kind, order, c0, tr0, tl0, two, halfwidth, dl,
+                                     top=top)
         if two and rank < 2:
             # one duration for both walls unless the walls' own fit the pulses clearly better
             e1, c1, t1, *_ = _refine(obj, kind, order, c0, 0.5 * (tr + tl), 0.5 * (tr + tl),
-                                     False, halfwidth, dl)
+                                     False, halfwidth, dl, top=top)
             if e1 <= _TWO_WALLS * e:
                 e, c, tr, tl = e1, c1, t1, t1
         best = (e, c, tr, tl, (0.0, 0.0), (0.0, 0.0))
@@ -903,7 +934,7 @@ def _search(obj: _Objective, kinds, fs: float, halfwidth: int, wide: bool = Fals
                 start = (c0, tr0, tl0) if (kr or kl) else (c, tr, tl)
                 sep = two and start[1] != start[2]
                 es, cs_, trs, tls, hrs, hls = _refine(obj, kind, order, *start, sep,
-                                                       halfwidth, dl, (fam, hr, hl))
+                                                       halfwidth, dl, (fam, hr, hl), top)
                 # a clearly better fit, not the noise's preference: the shape trades
                 # against duration and cut-off, and moves the contact entry with them
                 # and only for a contact resolved in time: the shape of a contact
@@ -926,7 +957,12 @@ def _search(obj: _Objective, kinds, fs: float, halfwidth: int, wide: bool = Fals
     if not wide and any(m.skew >= SKEW_RANGE[1] and m.phase == 0.0 for m in edge):
         # the learned "contact" is an extra pole (holdout10-048: a Bessel-5 with a
         # 1.6 ms arch at skew 8, entries 91 us late; wide: Butterworth-8, 10 us)
-        return _search(obj, kinds, fs, halfwidth, wide=True)
+        return _search(obj, kinds, fs, halfwidth, wide=True, beyond=beyond)
+    best = results[0][1][0]
+    if not beyond and "bessel" in kinds and best.kind == "bessel" and best.cutoff >= cutoffs[-1]:
+        alt = _search(obj, ("bessel",), fs, halfwidth, wide=wide, beyond=True)
+        if _BEYOND_GAIN * alt[0][0] < results[0][0]:
+            return sorted(alt + results, key=lambda r: r[0])
     return results
 
 
@@ -1284,7 +1320,8 @@ def _polish_cutoff(obj: _Objective, results):
 
     m0, (mr, ml) = results[0]
     c = mr.cutoff
-    lo, hi = 0.98 * c, min(1.02 * c, 0.499)
+    lim = max_cutoff(mr.kind, mr.order) if c > 0.49 else 0.5      # beyond only if found there
+    lo, hi = 0.98 * c, min(1.02 * c, 0.998 * lim)
 
     def cost(x):
         return obj((replace(mr, cutoff=x), replace(ml, cutoff=x)))
