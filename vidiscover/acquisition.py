@@ -97,16 +97,14 @@ def max_cutoff(kind: str, order: int) -> float:
 @functools.cache
 def _bessel_3db(order: int) -> float:
     """-3 dB frequency of the phase-normalised Bessel low-pass, in units of its cut-off."""
+    from scipy.optimize import brentq  # (only when a Bessel is checked)
+
     p, _ = _unit_poles("bessel", order)                # cut-off 1 rad/sample
 
-    def gain2(w):
-        return float(np.prod(np.abs(p) ** 2 / np.abs(1j * w - p) ** 2))
+    def excess(w):                                     # |H(jw)|^2 - 1/2, falls monotonically
+        return float(np.prod(np.abs(p) ** 2 / np.abs(1j * w - p) ** 2)) - 0.5
 
-    lo, hi = 0.1, 1.0                                  # gain2 falls monotonically
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if gain2(mid) > 0.5 else (lo, mid)
-    return 0.5 * (lo + hi)
+    return float(brentq(excess, 0.1, 1.0, xtol=1e-15, rtol=4 * np.finfo(float).eps))
 
 
 def pulse_kernel(dt_samples: np.ndarray, sample_rate: float, cutoff: float, tau: float,
