@@ -275,12 +275,38 @@ def test_parse_anti_alias():
     ("elliptic:4:2000", "KIND one of"), ("butter:9:2000", "ORDER must be"),
     ("butter:1", "ORDER must be"), ("butter:x:2000", "ORDER must be"),
     ("butter:4:-5", "CUTOFF_HZ must be"), ("butter:4:fast", "CUTOFF_HZ must be"),
-    ("butter:4:3200", "Nyquist"), ("linear-phase:4", "no order"), ("", "empty"),
+    ("butter:4:3200", "Nyquist"), ("bessel:4:4900", "-3 dB point reaches the Nyquist"),
+    ("bessel:2:4100", "bessel-2"), ("linear-phase:4", "no order"), ("", "empty"),
     ("butter:4:2000:1", "KIND one of")])
 def test_parse_anti_alias_errors_are_one_line(spec, words):
     with pytest.raises(InputError) as err:
         SensorConfig.parse_anti_alias(spec, sample_rate=6400.0)
     assert words in str(err.value) and "\n" not in str(err.value)
+
+
+def test_a_bessel_specified_at_its_minus_3_db_point_near_nyquist_is_simulated():
+    """Anti-alias Bessels are specified by their -3 dB point; ours are phase-normalised,
+    so a Bessel-4 whose -3 dB point is 0.46 fs has its cut-off at 0.70 fs (independent
+    P02's chain). It is accepted up to where the -3 dB point reaches the Nyquist
+    frequency (0.757 fs at order 4) and recorded with its design's delay and gain."""
+    parse = SensorConfig.parse_anti_alias
+    assert parse("bessel:4:4480", sample_rate=FS)["aa_cutoff"] == 4480.0
+    fc = 0.70 * FS
+    res = _smooth()
+    rec, _ = record(res, SensorConfig(anti_alias="bessel", aa_order=4, aa_cutoff=fc, **QUIET))
+    sos = _anti_alias_sos("bessel", 4, fc, 16 * FS)
+    h = signal.sosfreqz(sos, [0.46 * FS, 0.5 * FS, 8.0], fs=16 * FS)[1]
+    assert abs(h[0]) ** 2 == pytest.approx(0.5, abs=0.01) and abs(h[1]) ** 2 < 0.5
+    ga, gda, st, jerk, keep = _accel_gain_delay(res, rec)
+    delay = sum(signal.group_delay((q[:3], q[3:]), w=[1e-6])[1][0] for q in sos) / (16 * FS)
+    assert gda / ga == pytest.approx(delay, rel=3e-4)
+    assert ga == pytest.approx(abs(h[2]) * np.cos(2 * np.pi * 8.0 * delay), abs=1e-5)
+    # beyond the limit, and without room in the oversampled rate: one-line errors
+    for bad, words in (({"aa_cutoff": 0.76 * FS}, "-3 dB point reaches"),
+                       ({"aa_cutoff": fc, "oversample": 1}, "raise oversample")):
+        with pytest.raises(InputError) as err:
+            SensorConfig(anti_alias="bessel", aa_order=4, **bad)
+        assert words in str(err.value) and "\n" not in str(err.value)
 
 
 @pytest.mark.parametrize("fields,words", [

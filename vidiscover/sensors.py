@@ -30,7 +30,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
-from .acquisition import CHEBY1_RIPPLE_DB, pulse_kernel
+from .acquisition import CHEBY1_RIPPLE_DB, max_cutoff, pulse_kernel
 from .errors import InputError
 from .params import G_ACCEL
 from .recording import PAPER_SENSITIVITY, Metadata, Recording
@@ -41,6 +41,19 @@ __all__ = ["SensorConfig", "record", "pulse_kernel", "ANTI_ALIAS_KINDS"]
 
 #: Anti-alias filter kinds: the default delay-compensated FIR and causal analog designs.
 ANTI_ALIAS_KINDS = ("linear-phase", "butter", "bessel", "cheby1")
+
+
+def _aa_limit(kind: str, order: int, sample_rate: float) -> float:
+    """Highest anti-alias cut-off (Hz, exclusive) of a filter family at ``sample_rate``."""
+    return max_cutoff(kind, order) * sample_rate
+
+
+def _aa_where(kind: str, order: int, sample_rate: float) -> str:
+    """What that limit is, for an error message."""
+    nyq = f"the Nyquist frequency {0.5 * sample_rate:g} Hz"
+    lim = max_cutoff(kind, order)
+    return nyq if lim == 0.5 else (f"{lim * sample_rate:g} Hz, where a {kind}-{order}'s -3 dB "
+                                   f"point reaches {nyq}")
 
 
 @dataclass(frozen=True)
@@ -73,8 +86,10 @@ class SensorConfig:
     aa_order : int
         Order of a causal anti-alias filter (2-8; unused by ``linear-phase``).
     aa_cutoff : float or None
-        Anti-alias cut-off (Hz, below the Nyquist frequency); None: ``cutoff *
-        sample_rate``.
+        Anti-alias cut-off (Hz, below the Nyquist frequency; a ``bessel``'s up to where
+        its -3 dB point reaches it, :func:`vidiscover.acquisition.max_cutoff`: an
+        anti-alias Bessel specified "at" f -3 dB is phase-normalised at 1.27-1.93 f);
+        None: ``cutoff * sample_rate``.
     a_bias : float
         Accelerometer DC bias (m/s^2), added to ``a``.
     x_offset, xe_offset : float
@@ -164,10 +179,13 @@ class SensorConfig:
         integer("oversample", 1, 64)
         if self.aa_cutoff is not None:
             number("aa_cutoff", True)
-            if self.aa_cutoff >= 0.5 * self.sample_rate:
-                raise InputError(f"aa_cutoff {self.aa_cutoff!r} Hz must be below the Nyquist "
-                                 f"frequency {0.5 * self.sample_rate:g} Hz of sample_rate "
-                                 f"{self.sample_rate:g} Hz")
+            if self.aa_cutoff >= _aa_limit(self.anti_alias, self.aa_order, self.sample_rate):
+                raise InputError(f"aa_cutoff {self.aa_cutoff!r} Hz must be below "
+                                 f"{_aa_where(self.anti_alias, self.aa_order, self.sample_rate)}")
+            if self.aa_cutoff >= 0.5 * self.oversample * self.sample_rate:
+                raise InputError(f"aa_cutoff {self.aa_cutoff!r} Hz must be below half the "
+                                 f"oversampled rate ({0.5 * self.oversample * self.sample_rate:g}"
+                                 " Hz); raise oversample")
         for name in ("a_bias", "x_offset", "xe_offset"):
             number(name, False)
         for name in ("x_full_scale", "xe_full_scale", "a_full_scale"):
@@ -259,9 +277,10 @@ class SensorConfig:
             if not (math.isfinite(fc) and fc > 0):
                 raise InputError(f"--anti-alias {spec!r}: CUTOFF_HZ must be a number > 0 "
                                  f"(Hz), was {parts[2]!r}; {example}")
-            if sample_rate is not None and fc >= 0.5 * sample_rate:
-                raise InputError(f"--anti-alias {spec!r}: cut-off {fc:g} Hz must be below the "
-                                 f"Nyquist frequency {0.5 * sample_rate:g} Hz")
+            n = out.get("aa_order", SensorConfig.aa_order)
+            if sample_rate is not None and fc >= _aa_limit(kind, n, sample_rate):
+                raise InputError(f"--anti-alias {spec!r}: cut-off {fc:g} Hz must be below "
+                                 f"{_aa_where(kind, n, sample_rate)}")
             out["aa_cutoff"] = fc
         return out
 
