@@ -10,7 +10,10 @@ against 6.0 ms on an idle 2-core machine, 2026-11-26; 14.5 ms median, 13.6 best,
 2026-11-27 after the searches were batched, 578f987-2c7bd81, with the same
 detections; 8.4 ms median, 8.2 best, idle, 2026-11-27 after the resting-load search
 read its fits from inner products, 66dbce0, same detections; 10.5 / 9.5 in a run
-straight after the accuracy quotes), ``N``
+straight after the accuracy quotes; 8.6 ms median, 8.3 best, idle, 2026-11-27 after
+fewer numpy calls per search, dc90d42-1e9521d, same results: in-process A/B against the
+code before, interleaved, 300 pairs, CPU 9.8 -> 8.9 ms (0.90), within the spread of
+separate runs, 8.3-9.6 ms for either), ``N``
 runs after one warm-up, median
 and best wall-clock time and the best CPU time, with the bootstrap at its default
 (``n_boot=1000``) and small (100, 0), printed next to DESIGN.md section 8's 6 ms target

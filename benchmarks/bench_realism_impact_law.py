@@ -36,7 +36,10 @@ law so that the impact law is scored on its own:
   target line is the strict share.
 
 Figures are quoted on the ``holdout13`` split (see :mod:`vidiscover.corpus`).
-Measured (holdout12, 60 cases, run once, 2026-11-27, at cccbf5f): constant-r walls reported
+Measured (holdout13, 60 cases, run once, 2026-11-27, at 30d925b): constant-r walls reported
+constant 1.000 of 60; Hunt-Crossley walls within 0.03 at the third clearance 0.982 of 57
+(033 left rms 0.031, read 0.8015 - 0.183 v^2); true r inside the 95 % band at 0.945 of
+3124 impacts. Earlier (holdout12, at cccbf5f): constant-r walls reported
 constant 1.000 of 61; Hunt-Crossley walls within 0.03 at the third clearance 0.946 of 56
 (027 right rms 0.034, 050 right 0.033 and left 0.037: 050's impacts are timed 0.11 ms
 late, a learned response of another family than its Chebyshev chain); true r inside the
