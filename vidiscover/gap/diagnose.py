@@ -659,26 +659,17 @@ def _best_pair(model, nominal, fits, run, max_params=None):
 PAIR_SHARP_LO = True
 
 
-def _sharp_var(model) -> dict:
-    """The model's replicate variances without the LO statistics' model-form allowance."""
-    if model.sharp_lo:
-        return model.rep_var
-    return sharpen_lo(model.rep_var)
-
-
-def _sharpened(model, fit: CandidateFit) -> CandidateFit:
-    """``fit`` scored on its own validation draw with the LO statistics sharp."""
-    return dataclasses.replace(fit, gap=compare(model.real, fit.signature, _sharp_var(model)))
-
-
 def _choose_pair(model, pairs: list[CandidateFit], extra=None) -> CandidateFit:
     """The pair :func:`_parsimonious_pair` chooses, ranked on sharp LO scales.
 
-    (:data:`PAIR_SHARP_LO`; the pair is returned with its own gap.)
+    Each pair is scored on its own validation draw with the model's replicate
+    variances less the LO statistics' allowance (:data:`PAIR_SHARP_LO`; a model that
+    is sharp already ranks as it is). The pair is returned with its own gap.
     """
     if not PAIR_SHARP_LO or model.sharp_lo:
         return _parsimonious_pair(pairs, extra)
-    sharp = [_sharpened(model, p) for p in pairs]
+    var = sharpen_lo(model.rep_var)
+    sharp = [dataclasses.replace(p, gap=compare(model.real, p.signature, var)) for p in pairs]
     pick = _parsimonious_pair(sharp, extra)
     return pairs[next(k for k, p in enumerate(sharp) if p is pick)]
 
