@@ -27,8 +27,8 @@ beyond the wall by ``u- (t* - t_in)``; a Kelvin-Voigt wall releases the ball wit
 spring still compressed, so ``z_out`` is inside it).
 The recordings are simulated again for their truth (the analyses come from the cache).
 
-Figures are quoted on the held-back ``holdout13`` split (``test`` and ``holdout`` to
-``holdout12`` were looked at case by case); ``--split dev`` is for tuning.
+Figures are quoted on the held-back ``holdout14`` split (``test`` and ``holdout`` to
+``holdout13`` were looked at case by case); ``--split dev`` is for tuning.
 
 Measured (holdout13, 60 cases, run once, 2026-11-27, at 30d925b, with the contact placement
 as a standard error, 8c52138): identified 5, all within (0.083; target 0.9: 003, 005,
@@ -72,7 +72,7 @@ move theta by 0.2-1.6 deg (dev-000/002/007): the jumps, not the estimator, limit
 
 Usage::
 
-    python benchmarks/bench_realism_flight.py [--split holdout13] [--n 60] [--start 0]
+    python benchmarks/bench_realism_flight.py [--split holdout14] [--n 60] [--start 0]
         [--cache DIR] [--oracle]
 """
 
@@ -196,7 +196,7 @@ def score_case(case, cache: str | None = None, oracle: bool = False) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout13", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout14", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--cache", default=None,

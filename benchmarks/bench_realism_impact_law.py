@@ -35,7 +35,7 @@ law so that the impact law is scored on its own:
   at 1.4 times the speed is honest; one whose band is narrow and wrong is not. The
   target line is the strict share.
 
-Figures are quoted on the ``holdout13`` split (see :mod:`vidiscover.corpus`).
+Figures are quoted on the ``holdout14`` split (see :mod:`vidiscover.corpus`).
 Measured (holdout13, 60 cases, run once, 2026-11-27, at 30d925b): constant-r walls reported
 constant 1.000 of 60; Hunt-Crossley walls within 0.03 at the third clearance 0.982 of 57
 (033 left rms 0.031, read 0.8015 - 0.183 v^2); true r inside the 95 % band at 0.945 of
@@ -83,7 +83,7 @@ the sensors or the analysis change.
 
 Usage::
 
-    python benchmarks/bench_realism_impact_law.py [--split holdout13] [--n 60] [--n-boot 200]
+    python benchmarks/bench_realism_impact_law.py [--split holdout14] [--n 60] [--n-boot 200]
         [--cache DIR]
 """
 
@@ -245,7 +245,7 @@ def band_half_width(law, v: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.n
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout13", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout14", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--n-boot", type=int, default=200,
