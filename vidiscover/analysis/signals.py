@@ -239,9 +239,44 @@ def noise_sigma(y: np.ndarray, bad: np.ndarray) -> float:
 
     ``robust_std`` of :func:`second_difference_sample` over ``sqrt(6)``: the second
     difference of white noise has 6 times its variance, and a smooth signal leaves
-    almost nothing in it.
+    almost nothing in it. Never below the quantisation noise ``q / sqrt(12)`` of the
+    recording's smallest step ``q`` (:func:`quantisation_step`): behind a coarse ADC
+    whose step exceeds the analog noise, most second differences are exactly 0 and
+    their median absolute deviation is 0, although every sample carries an error of up
+    to half a step (a 12-bit +/-50 g accelerometer: steps of 0.24 m/s^2, sigma 0.069).
     """
-    return robust_std(second_difference_sample(y, bad)) / math.sqrt(6.0)
+    d2 = second_difference_sample(y, bad)
+    sigma = robust_std(d2) / math.sqrt(6.0)
+    # the floor can only act where at least a quarter of the second differences vanish
+    # (otherwise their median absolute deviation is at least one step): skip the search
+    # for the step elsewhere
+    if d2.size and 4 * np.count_nonzero(np.abs(d2) <= _ZERO_REL * np.abs(d2).max()) >= d2.size:
+        sigma = max(sigma, quantisation_step(y, bad) / math.sqrt(12.0))
+    return sigma
+
+
+_ZERO_REL = 1e-9    # a difference of quantised values this small (relative) is rounding
+
+
+def quantisation_step(y: np.ndarray, bad: np.ndarray, windows: int = 16,
+                      length: int = 512) -> float:
+    """The smallest non-zero change between two good neighbouring samples of ``y``.
+
+    Taken over ``windows`` runs of ``length`` samples spread over the record. For a
+    quantised recording it is the ADC step (neighbours differ by whole steps); for an
+    unquantised one it is a tiny fraction of the noise, so the floor it sets in
+    :func:`noise_sigma` does not act. 0.0 when no two good neighbours differ.
+    """
+    n = y.size
+    if n < 2:
+        return 0.0
+    length = min(length, n)
+    starts = np.unique(np.linspace(0, n - length, windows).astype(np.int64))
+    idx = (starts[:, None] + np.arange(length)).ravel()
+    d = np.abs(y[idx[1:]] - y[idx[:-1]])
+    ok = (idx[1:] == idx[:-1] + 1) & ~bad[idx[1:]] & ~bad[idx[:-1]]
+    ok &= d > _ZERO_REL * (d[ok].max() if ok.any() else 0.0)
+    return float(d[ok].min()) if ok.any() else 0.0
 
 
 def smoother_window(ms: float, fs: float, n: int) -> int:
