@@ -37,15 +37,25 @@ from threadpoolctl import threadpool_limits
 from ..errors import InputError
 from .labels import LABELS
 
-__all__ = ["RegimeClassifier", "RuleBaseline", "RegimeModel", "Classification",
+__all__ = ["RegimeClassifier", "RuleBaseline", "RegimeModel", "Classification", "REFUSED",
            "model_features", "train", "evaluate", "save_model", "load_model",
            "load_default_model", "TRUSTED_TYPES", "DEFAULT_MODEL", "DEFAULT_SEED",
            "choose_rule_labels", "choose_rule_gate",
            "DEFAULT_N_TRAIN", "DEFAULT_N_TEST", "format_report", "fit_model"]
 
 #: Registered features not used by the model (``n_impacts`` grows with the record
-#: length; the per-cycle features carry the same information).
-EXCLUDED_FEATURES: tuple[str, ...] = ("n_impacts",)
+#: length; the per-cycle features carry the same information; the rules alone read
+#: ``saturated_cycle_share``, which the shipped model was not trained with).
+EXCLUDED_FEATURES: tuple[str, ...] = ("n_impacts", "saturated_cycle_share")
+
+#: The label of a recording that is not classified: too few impacts were counted to
+#: tell an impacting motion, and a channel is saturated on too many cycles for
+#: ``no_impact`` to be claimed (:meth:`RuleBaseline.refused`). Not a regime: never a
+#: truth, never trained on; it counts as wrong in every score.
+REFUSED = "not_classified"
+#: The rules' ``no_impact`` bound (impacts per cycle below it) that the cycles where
+#: impacts cannot be counted must not be able to reach (:meth:`RuleBaseline.refused`).
+NO_IMPACT_IPC = 0.05
 
 #: The shipped model's file name, and the defaults of :func:`train` (a paper-rig set
 #: only). The shipped model comes out of ``vidiscover train --seed 0 --n 1200 --n-test
@@ -228,7 +238,10 @@ class RegimeClassifier(ClassifierMixin, BaseEstimator):
 class RuleBaseline:
     """The label rules of the README's 'Regime labels' applied to the *detected* features.
 
-    ``impacts_per_cycle`` < 0.05 -> ``no_impact``; ``impacting_cycle_share`` < 0.9 and
+    ``impacts_per_cycle`` < 0.05 -> ``no_impact``, unless a channel is saturated
+    on so many cycles (``saturated_cycle_share``) that impacts hidden there, one per
+    saturated cycle, would reach 0.05: then :data:`REFUSED` (:meth:`refused`);
+    ``impacting_cycle_share`` < 0.9 and
     ``envelope_modulation`` >= 0.15 -> ``smr``; otherwise, when the share is >= 0.9
     and the response is periodic (``strobe_state_error``, the labels' test on the
     stroboscopic LO state x and x', <= ``periodic_tol``; ``strobe_period_error``, x
@@ -268,7 +281,8 @@ class RuleBaseline:
         "strobe_period_error", "one_per_cycle_share", "two_per_cycle_share", "alternation",
         "asymmetry", "impact_period_error", "strong_two_share", "strong_alternation",
         "strobe_state_error", "merged_per_cycle", "merged_cycle_share", "merged_one_share",
-        "merged_two_share", "merged_alternation", "merged_asymmetry")
+        "merged_two_share", "merged_alternation", "merged_asymmetry",
+        "saturated_cycle_share")
     #: The merged feature the rules read in place of a plain one (when the table has it).
     MERGED: ClassVar[dict[str, str]] = {
         "impacts_per_cycle": "merged_per_cycle", "impacting_cycle_share": "merged_cycle_share",
@@ -301,13 +315,43 @@ class RuleBaseline:
                    | ((f["strong_two_share"] >= 0.9) & (f["strong_alternation"] >= 0.9)
                       & repeat))
             asym = np.nan_to_num(f["asymmetry"]) >= 0.1
+            low = ipc < NO_IMPACT_IPC
+            hidden = self._hidden(ipc, f["saturated_cycle_share"])
             out = np.select(
-                [ipc < 0.05, (phi < 0.9) & (f["envelope_modulation"] >= 0.15),
+                [low & ~hidden, low, (phi < 0.9) & (f["envelope_modulation"] >= 0.15),
                  (phi >= 0.9) & periodic & one, (phi >= 0.9) & periodic & two & asym,
                  (phi >= 0.9) & periodic & two, ((phi >= 0.9) | repeat) & periodic],
-                ["no_impact", "smr", "1ipc", "2ipc_asym", "2ipc_sym", "multi_ipc"],
+                ["no_impact", REFUSED, "smr", "1ipc", "2ipc_asym", "2ipc_sym", "multi_ipc"],
                 "chaotic")
         return out.astype(object)
+
+    @staticmethod
+    def _hidden(ipc: np.ndarray, saturated: np.ndarray) -> np.ndarray:
+        """Whether impacts hidden on the saturated cycles could reach the bound.
+
+        A saturated cycle (an accelerometer on its rail for longer than a pulse hides
+        impacts; a laser at full scale says the LO moves beyond the range set for it)
+        may hold an impact the detector cannot count: with one there per saturated
+        cycle, ``ipc + saturated`` would be the rate, and ``no_impact`` stands only
+        while that stays below :data:`NO_IMPACT_IPC` (NaN: nothing known, 0).
+        """
+        return np.nan_to_num(ipc) + np.nan_to_num(saturated) >= NO_IMPACT_IPC
+
+    def refused(self, features: pd.DataFrame) -> np.ndarray:
+        """Rows on which ``no_impact`` may not be claimed (a channel saturated).
+
+        Where fewer than :data:`NO_IMPACT_IPC` impacts per cycle were counted but
+        the saturated cycles could hide enough to reach it: neither the rules nor
+        the classifier (which reads the same missing impacts) may then call the
+        recording ``no_impact``; :meth:`RegimeModel.decide` labels it
+        :data:`REFUSED`.
+        """
+        frame = _rule_frame(features)
+        ipc = frame[self.MERGED["impacts_per_cycle"]] if (
+            self.MERGED["impacts_per_cycle"] in frame) else frame["impacts_per_cycle"]
+        ipc = ipc.to_numpy(float)
+        sat = frame["saturated_cycle_share"].to_numpy(float)
+        return self._hidden(ipc, sat)
 
 
 # --------------------------------------------------------------------------- model
@@ -429,7 +473,9 @@ class RegimeModel:
         The rule baseline's label where it is one of :attr:`rule_labels` and the
         classifier gives it at least its :attr:`rule_min_proba`, the classifier's
         elsewhere (``clf``, ``proba``: its labels and :meth:`predict_proba` when
-        already computed).
+        already computed). A ``no_impact`` either gives where a channel is saturated
+        on too many cycles (:meth:`RuleBaseline.refused`) becomes :data:`REFUSED`
+        (method ``"refused"``): it would rest on impacts that could not be counted.
         """
         gated = any(v > 0 for v in self.rule_min_proba.values())
         if gated and proba is None:
@@ -447,8 +493,12 @@ class RegimeModel:
             have = np.array([p[i, cols.index(r)] if r in cols else 0.0
                              for i, r in enumerate(rules)])
             keep &= have >= least
-        return (np.where(keep, rules, clf).astype(object),
-                np.where(keep, "rules", "classifier").astype(object))
+        labels = np.where(keep, rules, clf).astype(object)
+        methods = np.where(keep, "rules", "classifier").astype(object)
+        refuse = (labels == "no_impact") & RuleBaseline().refused(features)
+        labels[refuse] = REFUSED
+        methods[refuse] = "refused"
+        return labels, methods
 
     def predict_proba(self, features) -> pd.DataFrame:
         """Probabilities of every label of :data:`LABELS`, one row per case."""
@@ -510,6 +560,8 @@ class RegimeModel:
         rec = analysis.recording
         warn = self.domain_warnings(feats, rec.meta if rec is not None else None,
                                     analysis.detection.duration)
+        if method == "refused":
+            warn.insert(0, refusal_message(feats))
         return Classification(file=file or analysis.name, label=label,
                               proba={k: float(v) for k, v in proba.items()},
                               warnings=tuple(warn), features=feats, method=method)
@@ -528,6 +580,17 @@ class RegimeModel:
         return {"label": c.label, "method": c.method, "proba": c.proba}
 
 
+def refusal_message(features: Mapping) -> str:
+    """Why a recording is :data:`REFUSED` (one line, with how to fix it)."""
+    sat = float(features.get("saturated_cycle_share", math.nan))
+    ipc = features.get("merged_per_cycle", features.get("impacts_per_cycle", math.nan))
+    return (f"not classified: a channel is saturated (accelerometer or laser on its rail) "
+            f"on {100 * sat:.0f} % of the cycles, where impacts cannot be counted, and "
+            f"{float(ipc):.3f} impacts per cycle were counted elsewhere; no_impact would "
+            "rest on the missing impacts. Record with a larger accelerometer and laser "
+            "range")
+
+
 # --------------------------------------------------------------------------- train/eval
 def _scores(y_true, y_pred) -> dict:
     from sklearn.metrics import balanced_accuracy_score, confusion_matrix
@@ -535,16 +598,18 @@ def _scores(y_true, y_pred) -> dict:
     present = [lab for lab in LABELS if lab in set(y_true)]
     cm = confusion_matrix(y_true, y_pred, labels=list(LABELS))
     recall = {}
+    y_true = np.asarray(y_true, dtype=object)
     for i, lab in enumerate(LABELS):
-        if lab in present:
-            recall[lab] = float(cm[i, i] / cm[i].sum())
+        if lab in present:       # a refused recording is in no column: count the truths
+            recall[lab] = float(cm[i, i] / np.sum(y_true == lab))
     with warnings.catch_warnings():   # a label predicted but absent from the set
         warnings.filterwarnings("ignore", "y_pred contains classes not in y_true")
         bacc = float(balanced_accuracy_score(y_true, y_pred))
     return {"balanced_accuracy": bacc,
             "recall": recall,
             "confusion": {"labels": list(LABELS), "matrix": cm.tolist()},
-            "n": int(len(y_true)), "labels_present": present}
+            "n": int(len(y_true)), "labels_present": present,
+            "refused": int(np.sum(np.asarray(y_pred, dtype=object) == REFUSED))}
 
 
 def evaluate(model: RegimeModel, data: pd.DataFrame, baseline: RuleBaseline | None = None
@@ -1099,6 +1164,9 @@ def format_report(report: Mapping, confusion: bool = True) -> str:
     if final:
         lines.append(f"classify used the rules for {100 * final['rules_share']:.0f} % of "
                      "the recordings")
+        if final.get("refused"):
+            lines.append(f"classify refused {final['refused']} recording(s): a channel "
+                         "saturated, too few impacts counted to tell")
     if not confusion:
         return "\n".join(lines)
     for title, part in (("classifier", report), ("rule baseline", base)):

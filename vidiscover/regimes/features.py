@@ -21,6 +21,12 @@ float, NaN when undefined for the record.
   (part of :data:`ALL_FEATURES`), ``strobe_state_error`` (the labels' periodicity
   test on the stroboscopic LO state, x and x');
 * strengths: ``dv_side_ratio`` (|log| of the mean pulse ratio right/left);
+* saturation: ``saturated_cycle_share``, the share of complete cycles in which a
+  channel is on its rail (the accelerometer for longer than a clipped pulse, so that
+  impacts there are hidden, or the laser at its full scale): impacts cannot be
+  counted there, and the rules claim ``no_impact`` only where they can
+  (:class:`~vidiscover.regimes.classifier.RuleBaseline`). The model does not read it
+  (:data:`~vidiscover.regimes.classifier.EXCLUDED_FEATURES`);
 * in :data:`IMPACT_FEATURES` (part of :data:`ALL_FEATURES`), the strong impacts
   (|dv| >= :data:`STRONG_SHARE` of their wall's 90th percentile): ``strong_per_cycle``,
   ``strong_one_share``, ``strong_two_share``, ``strong_alternation``, ``weak_share``,
@@ -39,7 +45,7 @@ Examples
 --------
 >>> from vidiscover.regimes.features import ALL_FEATURES, REGIME_FEATURES
 >>> len(REGIME_FEATURES), set(REGIME_FEATURES) < set(ALL_FEATURES)
-(16, True)
+(17, True)
 """
 
 from __future__ import annotations
@@ -563,6 +569,24 @@ IMPACT_FEATURES = FeatureSet({
 })
 
 
+def _saturated_share(ctx: FeatureContext) -> float:
+    """Share of complete cycles with a channel on its rail.
+
+    The saturated sample times come from :func:`~vidiscover.analysis.analyze`
+    (``ctx.saturated_t``: the accelerometer on a rail for longer than a clipped pulse,
+    the laser at its full scale); a context made without them (by hand, or an
+    analysis's parts put together again) knows of no saturation and reads 0, as every
+    table computed before this feature existed is read by the rules.
+    """
+    c = _counts(ctx)
+    if not c.size:
+        return _NAN
+    sat = getattr(ctx, "saturated_t", None)
+    if sat is None:
+        return 0.0
+    return float((cycle_counts(sat, ctx.cycles()) > 0).mean())
+
+
 #: The features this module defines.
 REGIME_FEATURES = FeatureSet({
     "one_per_cycle_share": _share1,
@@ -581,6 +605,7 @@ REGIME_FEATURES = FeatureSet({
     "waveform_period": _wave_period,
     "strobe_dispersion": _strobe_disp,
     "envelope_cv": _env_cv,
+    "saturated_cycle_share": _saturated_share,
 })
 
 #: ``strobe_state_error`` (the labels' periodicity test on x and x', which the rule
