@@ -1,9 +1,9 @@
 """Regimes of saturated recordings (sat26).
 
-A recording whose accelerometer sits on its rail (longer than a clipped pulse: the
-forced response itself saturates and hides the impacts there) or whose laser reads its
-full scale for many cycles cannot count its impacts: finding few is no evidence of
-none. Every false ``no_impact`` of the realism corpus's spent splits was such a
+A recording whose accelerometer sits on its rail for many cycles (longer than a clipped
+pulse: the forced response itself saturates and hides the impacts there) cannot count
+its impacts: finding few is no evidence of none. A laser at its full scale hides no
+impact and does not count. Every false ``no_impact`` of the realism corpus's spent splits was such a
 recording; the rules and ``classify`` now claim ``no_impact`` only when the impacts
 that the saturated cycles could hide (one per cycle) stay below the label's 0.05 per
 cycle, and refuse the label (``not_classified``) otherwise.
@@ -102,7 +102,7 @@ def test_a_saturated_corpus_recording_is_not_called_no_impact():
     assert c.features["saturated_cycle_share"] > 0.9
     if c.method == "refused":
         assert c.label == "not_classified"
-        assert c.warnings[0].startswith("not classified: a channel is saturated")
+        assert c.warnings[0].startswith("not classified: the accelerometer is saturated")
 
 
 @pytest.mark.parametrize("split_case", [("holdout13", 0)])
@@ -114,3 +114,23 @@ def test_an_unsaturated_recording_reads_zero(split_case):
     c = load_default_model().classify(sim.recording)
     assert c.method != "refused"
     assert c.features["saturated_cycle_share"] == 0.0
+
+
+def test_a_railed_laser_alone_does_not_refuse_no_impact():
+    # a paper-rig record without impacts whose laser (16-bit, +/-0.1 mm) reads its full
+    # scale in every cycle: the accelerometer still sees every impact there is, so the
+    # record stays no_impact (counting the laser's rails refused the rules' label, and
+    # the classifier then said chaotic)
+    from vidiscover import Effects, preset
+    from vidiscover.regimes.classifier import load_default_model
+    from vidiscover.sensors import SensorConfig
+    from vidiscover.workflows import simulate_to_memory
+
+    p = preset("paper", b=0.03).replace(amplitude=0.1e-3, frequency=6.0)
+    sen = SensorConfig(adc_bits=16, x_full_scale=1e-4)
+    rec, truth, _ = simulate_to_memory(p, Effects(), sensors=sen, seed=5)
+    assert truth.label == "no_impact"
+    assert np.mean(np.abs(rec.x) >= 0.99e-4) > 0.2         # the laser is railed
+    c = load_default_model().classify(rec)
+    assert c.features["saturated_cycle_share"] == 0.0
+    assert c.label == "no_impact"

@@ -274,16 +274,16 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None,
 
 
 def _saturated_times(rec, det: ImpactDetection) -> np.ndarray:
-    """Times of the samples where a channel is on its rail (s, sorted).
+    """Times of the samples where the accelerometer is on its rail (s, sorted).
 
-    The accelerometer on one rail for longer than a clipped pulse
-    (:data:`~vidiscover.analysis.impacts._MAX_CLIP_RUN` samples: the forced response
-    itself saturates, and the detector cannot see or time impacts there), and the
-    laser at its full scale (its extreme value held, as the reconstruction leaves it
-    out of the pinning: the LO moves beyond the laser's range).
+    On one rail for longer than a clipped pulse
+    (:data:`~vidiscover.analysis.impacts._MAX_CLIP_RUN` samples): the forced response
+    itself saturates, and the detector cannot see or time impacts there. A laser at
+    its full scale hides no impact (the accelerometer finds them) and is left out: a
+    paper-rig record without impacts, its laser railed in every cycle, read
+    ``chaotic`` when it counted.
     """
     from .impacts import _MAX_CLIP_RUN, _rail_runs
-    from .reconstruction import _laser_rails
 
     a = np.asarray(rec.a, dtype=float)
     clip = np.asarray(det.bad, dtype=bool) & np.isfinite(a)
@@ -292,10 +292,6 @@ def _saturated_times(rec, det: ImpactDetection) -> np.ndarray:
         for lo, hi in _rail_runs(a, clip):
             if hi - lo > _MAX_CLIP_RUN:
                 sat[lo:hi] = True
-    x = np.asarray(rec.x, dtype=float)
-    rails = _laser_rails(x, np.isfinite(x))
-    if rails is not None:
-        sat |= rails
     return np.asarray(rec.t, dtype=float)[sat]
 
 

@@ -238,9 +238,9 @@ class RegimeClassifier(ClassifierMixin, BaseEstimator):
 class RuleBaseline:
     """The label rules of the README's 'Regime labels' applied to the *detected* features.
 
-    ``impacts_per_cycle`` < 0.05 -> ``no_impact``, unless a channel is saturated
-    on so many cycles (``saturated_cycle_share``) that impacts hidden there, one per
-    saturated cycle, would reach 0.05: then :data:`REFUSED` (:meth:`refused`);
+    ``impacts_per_cycle`` < 0.05 -> ``no_impact``, unless the accelerometer is
+    saturated on so many cycles (``saturated_cycle_share``) that impacts hidden there,
+    one per saturated cycle, would reach 0.05: then :data:`REFUSED` (:meth:`refused`);
     ``impacting_cycle_share`` < 0.9 and
     ``envelope_modulation`` >= 0.15 -> ``smr``; otherwise, when the share is >= 0.9
     and the response is periodic (``strobe_state_error``, the labels' test on the
@@ -329,8 +329,7 @@ class RuleBaseline:
     def _hidden(ipc: np.ndarray, saturated: np.ndarray) -> np.ndarray:
         """Whether impacts hidden on the saturated cycles could reach the bound.
 
-        A saturated cycle (an accelerometer on its rail for longer than a pulse hides
-        impacts; a laser at full scale says the LO moves beyond the range set for it)
+        A saturated cycle (the accelerometer on its rail for longer than a pulse)
         may hold an impact the detector cannot count: with one there per saturated
         cycle, ``ipc + saturated`` would be the rate, and ``no_impact`` stands only
         while that stays below :data:`NO_IMPACT_IPC` (NaN: nothing known, 0).
@@ -338,7 +337,7 @@ class RuleBaseline:
         return np.nan_to_num(ipc) + np.nan_to_num(saturated) >= NO_IMPACT_IPC
 
     def refused(self, features: pd.DataFrame) -> np.ndarray:
-        """Rows on which ``no_impact`` may not be claimed (a channel saturated).
+        """Rows on which ``no_impact`` may not be claimed (the accelerometer saturated).
 
         Where fewer than :data:`NO_IMPACT_IPC` impacts per cycle were counted but
         the saturated cycles could hide enough to reach it: neither the rules nor
@@ -584,11 +583,11 @@ def refusal_message(features: Mapping) -> str:
     """Why a recording is :data:`REFUSED` (one line, with how to fix it)."""
     sat = float(features.get("saturated_cycle_share", math.nan))
     ipc = features.get("merged_per_cycle", features.get("impacts_per_cycle", math.nan))
-    return (f"not classified: a channel is saturated (accelerometer or laser on its rail) "
-            f"on {100 * sat:.0f} % of the cycles, where impacts cannot be counted, and "
-            f"{float(ipc):.3f} impacts per cycle were counted elsewhere; no_impact would "
-            "rest on the missing impacts. Record with a larger accelerometer and laser "
-            "range")
+    return (f"not classified: the accelerometer is saturated (on its rail for longer than "
+            f"a pulse) on {100 * sat:.0f} % of the cycles, where impacts cannot be "
+            f"counted, and {float(ipc):.3f} impacts per cycle were counted elsewhere; "
+            "no_impact would rest on the missing impacts. Record with a larger "
+            "accelerometer range")
 
 
 # --------------------------------------------------------------------------- train/eval
@@ -1165,8 +1164,8 @@ def format_report(report: Mapping, confusion: bool = True) -> str:
         lines.append(f"classify used the rules for {100 * final['rules_share']:.0f} % of "
                      "the recordings")
         if final.get("refused"):
-            lines.append(f"classify refused {final['refused']} recording(s): a channel "
-                         "saturated, too few impacts counted to tell")
+            lines.append(f"classify refused {final['refused']} recording(s): the "
+                         "accelerometer saturated, too few impacts counted to tell")
     if not confusion:
         return "\n".join(lines)
     for title, part in (("classifier", report), ("rule baseline", base)):

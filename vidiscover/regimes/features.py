@@ -21,10 +21,10 @@ float, NaN when undefined for the record.
   (part of :data:`ALL_FEATURES`), ``strobe_state_error`` (the labels' periodicity
   test on the stroboscopic LO state, x and x');
 * strengths: ``dv_side_ratio`` (|log| of the mean pulse ratio right/left);
-* saturation: ``saturated_cycle_share``, the share of complete cycles in which a
-  channel is on its rail (the accelerometer for longer than a clipped pulse, so that
-  impacts there are hidden, or the laser at its full scale): impacts cannot be
-  counted there, and the rules claim ``no_impact`` only where they can
+* saturation: ``saturated_cycle_share``, the share of complete cycles in which the
+  accelerometer is on its rail for longer than a clipped pulse (the forced response
+  saturates and hides the impacts there): impacts cannot be counted there, and the
+  rules claim ``no_impact`` only where they can
   (:class:`~vidiscover.regimes.classifier.RuleBaseline`). The model does not read it
   (:data:`~vidiscover.regimes.classifier.EXCLUDED_FEATURES`);
 * in :data:`IMPACT_FEATURES` (part of :data:`ALL_FEATURES`), the strong impacts
@@ -570,11 +570,11 @@ IMPACT_FEATURES = FeatureSet({
 
 
 def _saturated_share(ctx: FeatureContext) -> float:
-    """Share of complete cycles with a channel on its rail.
+    """Share of complete cycles with the accelerometer on its rail.
 
     The saturated sample times come from :func:`~vidiscover.analysis.analyze`
-    (``ctx.saturated_t``: the accelerometer on a rail for longer than a clipped pulse,
-    the laser at its full scale); a context made without them (by hand, or an
+    (``ctx.saturated_t``: the accelerometer on a rail for longer than a clipped
+    pulse); a context made without them (by hand, or an
     analysis's parts put together again) knows of no saturation and reads 0, as every
     table computed before this feature existed is read by the rules.
     """
