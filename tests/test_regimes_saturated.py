@@ -134,3 +134,33 @@ def test_a_railed_laser_alone_does_not_refuse_no_impact():
     c = load_default_model().classify(rec)
     assert c.features["saturated_cycle_share"] == 0.0
     assert c.label == "no_impact"
+
+
+def test_feature_context_of_an_analysis_keeps_the_saturation():
+    # features of another set computed on an analysis already made see the same
+    # saturated cycles as the analysis's own (the context takes them from the recording)
+    from vidiscover import Effects, preset
+    from vidiscover.analysis import analyze
+    from vidiscover.analysis.returnmap import compute_features
+    from vidiscover.regimes.dataset import feature_context
+    from vidiscover.regimes.features import ALL_FEATURES
+    from vidiscover.sensors import SensorConfig
+    from vidiscover.workflows import simulate_to_memory
+
+    p = preset("paper")
+    a_range = 0.5 * (2 * np.pi * p.frequency) ** 2 * p.amplitude
+    rec, _, _ = simulate_to_memory(p, Effects(), sensors=SensorConfig(a_range=a_range),
+                                   seed=5, duration=2.0)
+    out = analyze(rec, n_boot=0, features=ALL_FEATURES)
+    again = compute_features(feature_context(out), ALL_FEATURES)
+    assert out.features["saturated_cycle_share"] > 0.9
+    assert again["saturated_cycle_share"] == out.features["saturated_cycle_share"]
+
+
+def test_a_refusal_is_said_as_it_is_and_other_warnings_as_out_of_domain():
+    from vidiscover.regimes.classifier import refusal_message, warning_text
+
+    why = refusal_message({"saturated_cycle_share": 1.0, "merged_per_cycle": 0.0})
+    assert warning_text(why) == why
+    assert warning_text("feature dt_max = 3.1 above 2.0").startswith(
+        "outside the training domain (feature dt_max")

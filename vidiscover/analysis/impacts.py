@@ -1163,6 +1163,22 @@ def _learn_through_clips(a: np.ndarray, clip: np.ndarray, nan: np.ndarray, fs: f
     return learn_pulse(fill_gaps(a, bad), fs, bad, smooth_ms=baseline_ms)
 
 
+def saturated_samples(a: np.ndarray, bad: np.ndarray) -> np.ndarray:
+    """Mask of the samples where the accelerometer sits on one rail for longer than a pulse.
+
+    The clipped runs (``bad`` samples with a finite reading) longer than
+    :data:`_MAX_CLIP_RUN` samples: there the forced response itself saturates, and
+    impacts can be neither seen nor timed. All False when nothing clips.
+    """
+    sat = np.zeros(a.size, dtype=bool)
+    clip = np.asarray(bad, dtype=bool) & np.isfinite(a)
+    if clip.any():
+        for lo, hi in _rail_runs(a, clip):
+            if hi - lo > _MAX_CLIP_RUN:
+                sat[lo:hi] = True
+    return sat
+
+
 def _rail_runs_long(a: np.ndarray, clip: np.ndarray) -> bool:
     """Whether some run on one rail is longer than :data:`_MAX_CLIP_RUN` samples."""
     return clip.any() and any(hi - lo > _MAX_CLIP_RUN for lo, hi in _rail_runs(a, clip))

@@ -249,11 +249,7 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None,
         recon = _tilted(recon, det, rec, mu, theta_deg)
     rest = estimate_restitution(recon, det, n_boot=n_boot, seed=seed)
     rm = return_map(det.t, det.side, forcing.period)
-    ctx = FeatureContext.of(det, forcing, recon, rm)
-    # the saturated samples, for the regime feature saturated_cycle_share (a context
-    # made elsewhere has none: that feature then reads 0)
-    object.__setattr__(ctx, "saturated_t", _saturated_times(rec, det))
-    features = compute_features(ctx, features)
+    features = compute_features(FeatureContext.of(det, forcing, recon, rm, rec), features)
     warnings = list(det.warnings)
     if forcing.source != "xe":
         warnings.append("base displacement 'xe' has no usable sine: cycles are cut with the "
@@ -271,28 +267,6 @@ def analyze(rec, mu: float = 0.0, *, b: float | None = None,
                           reconstruction=recon, restitution=rest, returnmap=rm,
                           features=features, regime_label=None, warnings=tuple(warnings),
                           _recording=rec, theta_deg=float(theta_deg), offsets=off)
-
-
-def _saturated_times(rec, det: ImpactDetection) -> np.ndarray:
-    """Times of the samples where the accelerometer is on its rail (s, sorted).
-
-    On one rail for longer than a clipped pulse
-    (:data:`~vidiscover.analysis.impacts._MAX_CLIP_RUN` samples): the forced response
-    itself saturates, and the detector cannot see or time impacts there. A laser at
-    its full scale hides no impact (the accelerometer finds them) and is left out: a
-    paper-rig record without impacts, its laser railed in every cycle, read
-    ``chaotic`` when it counted.
-    """
-    from .impacts import _MAX_CLIP_RUN, _rail_runs
-
-    a = np.asarray(rec.a, dtype=float)
-    clip = np.asarray(det.bad, dtype=bool) & np.isfinite(a)
-    sat = np.zeros(a.size, dtype=bool)
-    if clip.any():
-        for lo, hi in _rail_runs(a, clip):
-            if hi - lo > _MAX_CLIP_RUN:
-                sat[lo:hi] = True
-    return np.asarray(rec.t, dtype=float)[sat]
 
 
 def _pulse_summary(det: ImpactDetection) -> dict:

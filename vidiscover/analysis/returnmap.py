@@ -206,6 +206,11 @@ class FeatureContext:
     ts, x : ndarray
         Sample times (s) and LO displacement (m).
     returnmap : ReturnMap
+    saturated_t : ndarray or None
+        Times (s) of the samples where the accelerometer sits on its rail for longer than
+        a clipped pulse (:func:`~vidiscover.analysis.impacts.saturated_samples`), where
+        impacts can be neither seen nor timed; None when not known (a context made by
+        hand), read as no saturation.
     """
 
     t: np.ndarray = field(repr=False)
@@ -217,10 +222,11 @@ class FeatureContext:
     ts: np.ndarray = field(repr=False)
     x: np.ndarray = field(repr=False)
     returnmap: ReturnMap
+    saturated_t: np.ndarray | None = field(default=None, repr=False)
 
     @classmethod
-    def of(cls, detection, forcing: Forcing, reconstruction, returnmap: ReturnMap
-           ) -> FeatureContext:
+    def of(cls, detection, forcing: Forcing, reconstruction, returnmap: ReturnMap,
+           recording=None) -> FeatureContext:
         """The context of an analysis's parts.
 
         The one construction used by :func:`~vidiscover.analysis.analyze` and by
@@ -236,11 +242,20 @@ class FeatureContext:
         reconstruction : Reconstruction
             Its sample times ``t`` and LO displacement ``x_impacts``.
         returnmap : ReturnMap
+        recording : Recording, optional
+            The recording analysed: gives :attr:`saturated_t` (None without it).
         """
         t0 = float(detection.t0)
+        sat = None
+        if recording is not None:
+            from .impacts import saturated_samples
+
+            sat = np.asarray(recording.t, dtype=float)[
+                saturated_samples(np.asarray(recording.a, dtype=float), detection.bad)]
         return cls(t=detection.t, side=detection.side, dv=detection.dv, t_start=t0,
                    t_end=t0 + detection.n_samples / detection.sample_rate, forcing=forcing,
-                   ts=reconstruction.t, x=reconstruction.x_impacts, returnmap=returnmap)
+                   ts=reconstruction.t, x=reconstruction.x_impacts, returnmap=returnmap,
+                   saturated_t=sat)
 
     @property
     def period(self) -> float:

@@ -67,7 +67,7 @@ def classify(recordings, meta, model_path, channels, as_json):
       chaotic     impacts, but neither periodic nor SMR
     """  # noqa: D301 - the backspace is click's no-rewrap marker
     from ..io import read_recording
-    from ..regimes.classifier import load_default_model, load_model
+    from ..regimes.classifier import load_default_model, load_model, warning_text
 
     recordings = recording_paths(recordings)
     recs = [read_recording(p, meta=meta, channels=channels) for p in recordings]
@@ -75,8 +75,7 @@ def classify(recordings, meta, model_path, channels, as_json):
     results = [model.classify(rec, file=str(p)).to_dict() for p, rec in zip(recordings, recs)]
     for r in results:
         for w in r["warnings"]:
-            click.echo(f"vidiscover: warning: {r['file']}: outside the training domain "
-                       f"({w}); the label may be unreliable", err=True)
+            click.echo(f"vidiscover: warning: {r['file']}: {warning_text(w)}", err=True)
     human = "\n".join(f"{r['file']}: {r['label']} [{r['method']}] "
                       f"({_proba_text(r['proba'])})" for r in results)
     emit(as_json, results, human)

@@ -590,6 +590,17 @@ def refusal_message(features: Mapping) -> str:
             "accelerometer range")
 
 
+def warning_text(warning: str) -> str:
+    """A :class:`Classification` warning as a user reads it.
+
+    A refusal (:func:`refusal_message`) is said as it is; any other warning names a
+    feature outside the training domain, and the label may be unreliable.
+    """
+    if warning.startswith("not classified"):
+        return warning
+    return f"outside the training domain ({warning}); the label may be unreliable"
+
+
 # --------------------------------------------------------------------------- train/eval
 def _scores(y_true, y_pred) -> dict:
     from sklearn.metrics import balanced_accuracy_score, confusion_matrix

@@ -284,7 +284,7 @@ def feature_context(analysis):
     from ..analysis.returnmap import FeatureContext
 
     return FeatureContext.of(analysis.detection, analysis.forcing, analysis.reconstruction,
-                             analysis.returnmap)
+                             analysis.returnmap, analysis.recording)
 
 
 def simulate_case(case: Case) -> dict:

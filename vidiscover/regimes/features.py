@@ -572,16 +572,15 @@ IMPACT_FEATURES = FeatureSet({
 def _saturated_share(ctx: FeatureContext) -> float:
     """Share of complete cycles with the accelerometer on its rail.
 
-    The saturated sample times come from :func:`~vidiscover.analysis.analyze`
-    (``ctx.saturated_t``: the accelerometer on a rail for longer than a clipped
-    pulse); a context made without them (by hand, or an
-    analysis's parts put together again) knows of no saturation and reads 0, as every
-    table computed before this feature existed is read by the rules.
+    The saturated sample times are the context's ``saturated_t`` (the accelerometer on
+    a rail for longer than a clipped pulse, known when the context was made with its
+    recording); a context made without them (by hand) knows of no saturation and reads
+    0, as every table computed before this feature existed is read by the rules.
     """
     c = _counts(ctx)
     if not c.size:
         return _NAN
-    sat = getattr(ctx, "saturated_t", None)
+    sat = ctx.saturated_t
     if sat is None:
         return 0.0
     return float((cycle_counts(sat, ctx.cycles()) > 0).mean())

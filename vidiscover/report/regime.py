@@ -38,9 +38,10 @@ def attach_regime(result, model):
 
     if model is None:
         return result, None
+    from ..regimes.classifier import warning_text
+
     c = model.classify_analysis(result)
     warnings = tuple(result.warnings) + tuple(
-        f"regime classifier: outside the training domain ({w}); the label may be "
-        "unreliable" for w in c.warnings)
+        f"regime classifier: {warning_text(w)}" for w in c.warnings)
     result = dataclasses.replace(result, regime_label=str(c.label), warnings=warnings)
     return result, {"proba": dict(c.proba), "source": "classifier"}
