@@ -27,6 +27,12 @@ beyond the wall by ``u- (t* - t_in)``; a Kelvin-Voigt wall releases the ball wit
 spring still compressed, so ``z_out`` is inside it).
 The recordings are simulated again for their truth (the analyses come from the cache).
 
+``--periods N`` records each clearance for N forcing periods instead of the corpus's
+``RECORD_PERIODS`` = 40 (the case's ``duration``; everything else of the case, the
+settling included, is kept): how long a user must record for the law to be identified.
+The cache keys the analyses by it (``<case>-p<N>.pkl``; the corpus's 40 keep their
+plain names).
+
 Figures are quoted on the held-back ``holdout14`` split (``test`` and ``holdout`` to
 ``holdout13`` were looked at case by case); ``--split dev`` is for tuning.
 
@@ -73,7 +79,7 @@ move theta by 0.2-1.6 deg (dev-000/002/007): the jumps, not the estimator, limit
 Usage::
 
     python benchmarks/bench_realism_flight.py [--split holdout14] [--n 60] [--start 0]
-        [--cache DIR] [--oracle]
+        [--cache DIR] [--oracle] [--periods 40]
 """
 
 from __future__ import annotations
@@ -88,7 +94,7 @@ import numpy as np
 from _case_cache import cached
 
 from vidiscover.analysis import analyze
-from vidiscover.corpus import N_CASES, realism_corpus
+from vidiscover.corpus import N_CASES, RECORD_PERIODS, realism_corpus
 from vidiscover.discovery.flight_law import discover_flight_law
 
 #: Clearances of the pool, as fractions of the case's own.
@@ -102,14 +108,36 @@ def analyses(case, cache: str | None = None) -> list:
 
     The cache holds the analyses only (pickles named after the case): the flight law is
     always evaluated by the code under test. Delete the directory when the simulation,
-    the sensors or the analysis change.
+    the sensors or the analysis change. A record length other than the corpus's
+    ``RECORD_PERIODS`` forcing periods is part of the key.
     """
     def compute():
         return [analyze(dataclasses.replace(case, b=case.b * ratio, seed=case.seed + k)
                         .simulate(label=False).recording, n_boot=0)
                 for k, ratio in enumerate(RATIOS)]
 
-    return cached(cache, case.name, compute)
+    return cached(cache, _cache_key(case), compute)
+
+
+def record_periods(case) -> int:
+    """The case's record length in forcing periods (``duration`` x ``frequency``)."""
+    return int(round(case.duration * case.frequency))
+
+
+def with_periods(case, periods: int):
+    """The case recorded for ``periods`` forcing periods (the case itself at the corpus's)."""
+    if periods <= 0:
+        raise SystemExit(f"--periods {periods}: a record needs at least one forcing "
+                         f"period; give a positive count (the corpus's is {RECORD_PERIODS})")
+    if periods == record_periods(case):
+        return case
+    return dataclasses.replace(case, duration=periods / case.frequency)
+
+
+def _cache_key(case) -> str:
+    """The cache name: the case's, with ``-p<N>`` when not recorded for the corpus's length."""
+    n = record_periods(case)
+    return case.name if n == RECORD_PERIODS else f"{case.name}-p{n}"
 
 
 def oracle_flights(case, outs) -> tuple[list, list]:
@@ -201,13 +229,19 @@ def main() -> None:
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--cache", default=None,
                     help="directory caching the analyses (the slow part) between runs")
+    ap.add_argument("--periods", type=int, default=RECORD_PERIODS,
+                    help="forcing periods recorded per clearance (default: the corpus's "
+                         f"{RECORD_PERIODS})")
     ap.add_argument("--oracle", action="store_true",
                     help="also fit with the true jumps (and equivalent impacts) of each case")
     args = ap.parse_args()
     cases = realism_corpus(args.split, min(args.start + args.n, N_CASES[args.split]))
-    cases = cases[args.start:]
+    cases = [with_periods(c, args.periods) for c in cases[args.start:]]
     print(f"bench_realism_flight: {len(cases)} cases of the {args.split!r} split, "
-          f"3 clearances each; {platform.machine()}, {os.cpu_count()} cores, "
+          f"3 clearances each"
+          + ("" if args.periods == RECORD_PERIODS
+             else f" recorded for {args.periods} forcing periods (corpus: {RECORD_PERIODS})")
+          + f"; {platform.machine()}, {os.cpu_count()} cores, "
           f"load {os.getloadavg()[0]:.2f}")
     rows = []
     for case in cases:
