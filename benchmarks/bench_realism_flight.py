@@ -36,7 +36,15 @@ plain names).
 Figures are quoted on the held-back ``holdout14`` split (``test`` and ``holdout`` to
 ``holdout13`` were looked at case by case); ``--split dev`` is for tuning.
 
-Measured (holdout13, 60 cases, run once, 2026-11-27, at 30d925b, with the contact placement
+Measured (holdout14, 60 cases, run once, 2026-11-27, at ee2348a): identified 4, all within
+(0.067; target 0.9: 000, 003, 007, 040), outside 0, bad 0; 2 input errors (044, 049: 7 and
+0 usable impacts); refused 54: friction or inclination undetermined 25, weak form misfit
+21, placement in the contact 4, the law moves between recordings 3, wall pulse areas 1.
+``--periods`` (flight26, spent holdout13, first 24 cases): 40, 80, 160 and 320 periods per
+clearance identified 3, 3, 3 and 2 laws, all within; the fit's own se falls as
+1/sqrt(periods) (ratio 0.40 at 320), the placement's does not (1.0), and weak-form
+refusals rise (9 -> 13): record length is not what limits the law here.
+Earlier (holdout13, 60 cases, run once, 2026-11-27, at 30d925b, with the contact placement
 as a standard error, 8c52138): identified 5, all within (0.083; target 0.9: 003, 005,
 017, 024, 040), outside 0, bad 0; 3 input errors (012, 038, 045: no usable impacts);
 refused 52: friction or inclination undetermined 25, weak form misfit 21, placement in the

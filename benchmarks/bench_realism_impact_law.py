@@ -36,7 +36,13 @@ law so that the impact law is scored on its own:
   target line is the strict share.
 
 Figures are quoted on the ``holdout14`` split (see :mod:`vidiscover.corpus`).
-Measured (holdout13, 60 cases, run once, 2026-11-27, at 30d925b): constant-r walls reported
+Measured (holdout14, 60 cases, run once, 2026-11-27, at ee2348a): constant-r walls reported
+constant 1.000 of 70; Hunt-Crossley walls within 0.03 at the third clearance 0.891 of 46
+(MISSED: 022 left rms 0.066, read 1 - 0.381 v^0.5 with a band of 0.015; 021 left 0.031,
+039 both 0.034 / 0.043 and 046 left 0.050 read constant from two clearances of nearly one
+speed, bands 0.034-0.27, i.e. not identified there); within 0.03 at 0.977 of the 44 walls
+whose band is <= 0.03 somewhere; true r inside the 95 % band at 0.947 of 2621 impacts.
+Earlier (holdout13, at 30d925b): constant-r walls reported
 constant 1.000 of 60; Hunt-Crossley walls within 0.03 at the third clearance 0.982 of 57
 (033 left rms 0.031, read 0.8015 - 0.183 v^2); true r inside the 95 % band at 0.945 of
 3124 impacts. Earlier (holdout12, at cccbf5f): constant-r walls reported
