@@ -13,7 +13,10 @@ read its fits from inner products, 66dbce0, same detections; 10.5 / 9.5 in a run
 straight after the accuracy quotes; 8.6 ms median, 8.3 best, idle, 2026-11-27 after
 fewer numpy calls per search, dc90d42-1e9521d, same results: in-process A/B against the
 code before, interleaved, 300 pairs, CPU 9.8 -> 8.9 ms (0.90), within the spread of
-separate runs, 8.3-9.6 ms for either), ``N``
+separate runs, 8.3-9.6 ms for either); on the next stop's machine (2026-11-27, a slower
+and noisier VM of the same kind) 12.5 ms best at ee2348a against 12.3 best for the code
+before (68482a7), separate runs on the idle machine, medians 12.8-19 ms bimodal for
+either: no change of the code's speed, a slower machine), ``N``
 runs after one warm-up, median
 and best wall-clock time and the best CPU time, with the bootstrap at its default
 (``n_boot=1000``) and small (100, 0), printed next to DESIGN.md section 8's 6 ms target
