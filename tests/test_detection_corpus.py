@@ -46,12 +46,16 @@ def test_a_long_hunt_crossley_contact_behind_a_butterworth_filter_is_one_impact(
     up to 24 noise sigmas that later rounds took for a second impact 3-5 samples after
     the first (185 detections for 175 episodes, 11 false). A longer-contact variant of
     the learned pulse is now fitted where it explains that residual: one impact per
-    contact, the entries 87 us from the truth instead of 187."""
+    contact, the entries 87 us from the truth instead of 187.
+
+    The compliant engine's trajectory depends on the CPU's last bits (libm): 175
+    detectable episodes on one x86_64 machine, 173 on another (found 174 and 173, 87
+    and 88 us); the bounds hold on both."""
     imp, ok, det, ie, it = episodes("dev", 72)
-    assert ok.sum() == 175
-    assert ok[it].sum() >= 173                                # measured 174, was 174
+    assert ok.sum() >= 170
+    assert ok[it].sum() >= ok.sum() - 2                       # measured all but 1 / 0
     assert det.n - ie.size <= 1                               # measured 0 false, was 11
-    assert np.median(np.abs(det.t[ie] - imp.t_in[it])) < 110e-6   # measured 87 us, was 187
+    assert np.median(np.abs(det.t[ie] - imp.t_in[it])) < 110e-6   # measured 87-88 us, was 187
 
 
 def test_a_wall_with_few_strong_pulses_gets_its_own_contact_duration():
@@ -59,10 +63,14 @@ def test_a_wall_with_few_strong_pulses_gets_its_own_contact_duration():
     level where learning stopped (28), 2 of the 12 isolated pulses were the soft right
     wall's, too few for its own contact duration; it took the left wall's tau 0 and its
     2-sample contacts were timed 0.87 sample late (median 278 us over both walls). The
-    next level (SNR 20) is now tried for it: 18 right pulses of 40, tau 1.9 samples."""
+    next level (SNR 20) is now tried for it: 18 right pulses of 40, tau 1.9 samples.
+
+    The compliant engine's trajectory depends on the CPU's last bits (libm): on a second
+    x86_64 machine the record holds 125 detectable episodes, not 134, all found, none
+    false, tau 1.94 samples, median 134 us (70 us on the first); the fault gave 278."""
     imp, ok, det, ie, it = episodes("dev", 33)
     fs = det.sample_rate
     assert det.response.model.tau * fs > 1.0                  # measured 1.9, was 0
-    assert ok[it].sum() >= 131                                # measured 132 of 134, was 132
+    assert ok[it].sum() >= ok.sum() - 3                       # measured 132 of 134; 125 of 125
     assert ie.size == det.n                                   # none false
-    assert np.median(np.abs(det.t[ie] - imp.t_in[it])) < 90e-6    # measured 70 us, was 278
+    assert np.median(np.abs(det.t[ie] - imp.t_in[it])) < 150e-6   # measured 70 / 134 us, was 278
