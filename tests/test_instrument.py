@@ -355,3 +355,13 @@ def test_compliant_contact_pulses_keep_the_velocity_change(kind, order):
         assert abs(area - (v[1] - v[0])) <= abs(dv) * alias + 5e-6
         checked += 1
     assert checked >= 20
+
+
+@pytest.mark.parametrize("spec", ["butter:4:3200", "bessel:4:4900"])
+def test_a_cut_off_beyond_the_limit_says_how_to_fix_it(spec):
+    with pytest.raises(InputError, match="lower the cut-off or raise the sample rate"):
+        SensorConfig.parse_anti_alias(spec, sample_rate=6400.0)
+    kind, order, fc = spec.split(":")
+    with pytest.raises(InputError, match="lower the cut-off or raise the sample rate"):
+        SensorConfig(anti_alias=kind, aa_order=int(order), aa_cutoff=float(fc),
+                     sample_rate=6400.0)

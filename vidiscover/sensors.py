@@ -52,8 +52,9 @@ def _aa_where(kind: str, order: int, sample_rate: float) -> str:
     """What that limit is, for an error message."""
     nyq = f"the Nyquist frequency {0.5 * sample_rate:g} Hz"
     lim = max_cutoff(kind, order)
-    return nyq if lim == 0.5 else (f"{lim * sample_rate:g} Hz, where a {kind}-{order}'s -3 dB "
-                                   f"point reaches {nyq}")
+    where = nyq if lim == 0.5 else (f"{lim * sample_rate:g} Hz, where a {kind}-{order}'s -3 dB "
+                                    f"point reaches {nyq}")
+    return f"{where}; lower the cut-off or raise the sample rate"
 
 
 @dataclass(frozen=True)
