@@ -164,3 +164,12 @@ def test_a_refusal_is_said_as_it_is_and_other_warnings_as_out_of_domain():
     assert warning_text(why) == why
     assert warning_text("feature dt_max = 3.1 above 2.0").startswith(
         "outside the training domain (feature dt_max")
+
+
+def test_only_saturated_rows_below_the_bound_are_refused():
+    # an unsaturated row with 0.06 impacts per cycle counted, which a classifier may
+    # still call no_impact, is no refusal (it was: ipc alone reached the bound)
+    from vidiscover.regimes.classifier import RuleBaseline
+
+    rows = _frame(np.array([0.06, 0.0, 0.02, 0.02]), np.array([0.0, 0.0, 0.5, 0.01]))
+    assert list(RuleBaseline().refused(rows)) == [False, False, True, False]

@@ -348,9 +348,9 @@ class RuleBaseline:
         frame = _rule_frame(features)
         ipc = frame[self.MERGED["impacts_per_cycle"]] if (
             self.MERGED["impacts_per_cycle"] in frame) else frame["impacts_per_cycle"]
-        ipc = ipc.to_numpy(float)
+        ipc = np.nan_to_num(ipc.to_numpy(float))
         sat = frame["saturated_cycle_share"].to_numpy(float)
-        return self._hidden(ipc, sat)
+        return (ipc < NO_IMPACT_IPC) & self._hidden(ipc, sat)
 
 
 # --------------------------------------------------------------------------- model
