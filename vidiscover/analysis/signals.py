@@ -250,7 +250,8 @@ def noise_sigma(y: np.ndarray, bad: np.ndarray) -> float:
     # the floor can only act where at least a quarter of the second differences vanish
     # (otherwise their median absolute deviation is at least one step): skip the search
     # for the step elsewhere
-    if d2.size and 4 * np.count_nonzero(np.abs(d2) <= _ZERO_REL * np.abs(d2).max()) >= d2.size:
+    ad2 = np.abs(d2)
+    if d2.size and 4 * np.count_nonzero(ad2 <= _ZERO_REL * ad2.max()) >= d2.size:
         sigma = max(sigma, quantisation_step(y, bad) / math.sqrt(12.0))
     return sigma
 
