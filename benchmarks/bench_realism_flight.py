@@ -33,8 +33,8 @@ settling included, is kept): how long a user must record for the law to be ident
 The cache keys the analyses by it (``<case>-p<N>.pkl``; the corpus's 40 keep their
 plain names).
 
-Figures are quoted on the held-back ``holdout14`` split (``test`` and ``holdout`` to
-``holdout13`` were looked at case by case); ``--split dev`` is for tuning.
+Figures are quoted on the held-back ``holdout15`` split (``test`` and ``holdout`` to
+``holdout14`` were looked at case by case); ``--split dev`` is for tuning.
 
 Measured (holdout14, 60 cases, run once, 2026-11-27, at ee2348a): identified 4, all within
 (0.067; target 0.9: 000, 003, 007, 040), outside 0, bad 0; 2 input errors (044, 049: 7 and
@@ -86,7 +86,7 @@ move theta by 0.2-1.6 deg (dev-000/002/007): the jumps, not the estimator, limit
 
 Usage::
 
-    python benchmarks/bench_realism_flight.py [--split holdout14] [--n 60] [--start 0]
+    python benchmarks/bench_realism_flight.py [--split holdout15] [--n 60] [--start 0]
         [--cache DIR] [--oracle] [--periods 40]
 """
 
@@ -232,7 +232,7 @@ def score_case(case, cache: str | None = None, oracle: bool = False) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout14", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout15", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--cache", default=None,

@@ -35,7 +35,7 @@ law so that the impact law is scored on its own:
   at 1.4 times the speed is honest; one whose band is narrow and wrong is not. The
   target line is the strict share.
 
-Figures are quoted on the ``holdout14`` split (see :mod:`vidiscover.corpus`).
+Figures are quoted on the ``holdout15`` split (see :mod:`vidiscover.corpus`).
 Measured (holdout14, 60 cases, run once, 2026-11-27, at ee2348a): constant-r walls reported
 constant 1.000 of 70; Hunt-Crossley walls within 0.03 at the third clearance 0.891 of 46
 (MISSED: 022 left rms 0.066, read 1 - 0.381 v^0.5 with a band of 0.015; 021 left 0.031,
@@ -89,7 +89,7 @@ the sensors or the analysis change.
 
 Usage::
 
-    python benchmarks/bench_realism_impact_law.py [--split holdout14] [--n 60] [--n-boot 200]
+    python benchmarks/bench_realism_impact_law.py [--split holdout15] [--n 60] [--n-boot 200]
         [--cache DIR]
 """
 
@@ -251,7 +251,7 @@ def band_half_width(law, v: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.n
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout14", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout15", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--n-boot", type=int, default=200,
