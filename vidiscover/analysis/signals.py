@@ -110,19 +110,57 @@ def robust_std(x: np.ndarray) -> float:
     if x.size == 0:
         return 0.0
     med = _median(x)
-    return float(1.4826 * _median(np.abs(x - med)))
+    dev = np.subtract(x, med)           # (x - med, its absolute value in place)
+    np.abs(dev, out=dev)
+    return float(1.4826 * _median(dev, own=True))
 
 
-def _median(x: np.ndarray) -> float:
+#: :func:`_median` selects among the samples near a sample's middle from this size on.
+_SELECT_MIN = 4096
+_SELECT_STEP = 16
+
+
+def _median(x: np.ndarray, own: bool = False) -> float:
     """Median of a finite 1-D array (``np.median`` without its checks).
 
     For an even count the lower middle value is the largest of the ``k`` values a
     partition at ``k`` leaves below: numpy's partition at two positions at once
-    ``(k - 1, k)`` took 8x as long on 32768 normal samples (303 vs 38 us).
+    ``(k - 1, k)`` took 8x as long on 32768 normal samples (303 vs 38 us). ``own``:
+    ``x`` may be reordered (no copy).
+
+    From :data:`_SELECT_MIN` samples on, the middle values are selected from the
+    samples between two order statistics of every :data:`_SELECT_STEP`-th sample
+    (about 4 standard errors of rank either side of its middle; the samples below
+    them counted): about 1/6 of them is partitioned, not all, after a few
+    vectorised comparisons (robust_std of 8192 samples: 2 partitions of 60-80 us on
+    this machine, 2026-11-27). The same values: the k-th smallest sample is one
+    number whichever way it is selected (of equal values -0.0 and 0.0 either may be
+    returned, as from a partition; :func:`robust_std` does not depend on the sign
+    of a zero median). The whole array is partitioned when the bounds miss the
+    middle: never for the arrays of tests/test_signals_median.py (normal, tied,
+    sorted, random-walk, Cauchy, ...; 10 seeds, 1200 arrays and deviations).
     """
     n = x.size
     k = n // 2
-    p = np.partition(x, k)
+    if n >= _SELECT_MIN:
+        s = x[::_SELECT_STEP]
+        m = s.size
+        c = (k * (m - 1)) // (n - 1)
+        d = int(2.0 * math.sqrt(m)) + 2
+        i_lo, i_hi = max(0, c - d), min(m - 1, c + 1 + d)
+        sp = np.partition(s, (i_lo, i_hi))
+        lo, hi = sp[i_lo], sp[i_hi]
+        inside = x >= lo
+        j = k - (n - int(np.count_nonzero(inside)))     # rank among those >= lo
+        inside &= x <= hi
+        cand = x[inside]
+        if 1 <= j < cand.size:
+            x, k, own = cand, j, True
+    if own:
+        x.partition(k)
+        p = x
+    else:
+        p = np.partition(x, k)
     if n % 2:
         return float(p[k])
     return 0.5 * (float(p[:k].max()) + float(p[k]))
