@@ -261,14 +261,17 @@ def second_difference_sample(y: np.ndarray, bad: np.ndarray, count: int = 8192
     """
     m = y.size - 2
     if not bad.any():
-        k = np.arange(0, m, max(1, m // count))
-    else:
-        def ok(lo, hi):
-            return ~(bad[lo + 2:hi + 2] | bad[lo + 1:hi + 1] | bad[lo:hi])
+        # (the samples k, k + 1, k + 2 at k = 0, step, ...: strided views, no gathers)
+        step = max(1, m // count)
+        y0, y1, y2 = y[0:m:step], y[1:m + 1:step], y[2:m + 2:step]
+        return (y2 - y1) - (y1 - y0)
 
-        n_ok = sum(int(np.count_nonzero(ok(lo, min(lo + _SAMPLE_BLOCK, m))))
-                   for lo in range(0, m, _SAMPLE_BLOCK))
-        k = _ranked(ok, m, max(1, n_ok // count))
+    def ok(lo, hi):
+        return ~(bad[lo + 2:hi + 2] | bad[lo + 1:hi + 1] | bad[lo:hi])
+
+    n_ok = sum(int(np.count_nonzero(ok(lo, min(lo + _SAMPLE_BLOCK, m))))
+               for lo in range(0, m, _SAMPLE_BLOCK))
+    k = _ranked(ok, m, max(1, n_ok // count))
     return (y[k + 2] - y[k + 1]) - (y[k + 1] - y[k])
 
 
@@ -687,7 +690,7 @@ def fit_forcing(t: np.ndarray, xe: np.ndarray, f_hint: float, iterations: int = 
     """
     fallback = Forcing(float(f_hint), float("nan"), 0.0, "metadata")
     ok = np.isfinite(xe)
-    if ok.sum() < 8 or (t[-1] - t[0]) < 1.0 / f_hint:
+    if np.count_nonzero(ok) < 8 or (t[-1] - t[0]) < 1.0 / f_hint:
         return fallback
     step = max(1, int(ok.size // 1024))
     tt = t[::step][ok[::step]]
@@ -818,11 +821,13 @@ def estimate_offsets(t: np.ndarray, x: np.ndarray, a: np.ndarray, xe: np.ndarray
 def _nanmean(y: np.ndarray) -> float:
     """``np.nanmean(y)``, without its masked copy when ``y`` has no NaN.
 
-    (The same pairwise sum of the same values, divided by the same count.)
+    (The same pairwise sum of the same values, divided by the same count.) The NaN
+    samples are looked for only when the mean is NaN.
     """
-    if np.isnan(y).any():
+    m = float(np.mean(y))
+    if m != m and np.isnan(y).any():
         return float(np.nanmean(y))
-    return float(np.mean(y))
+    return m
 
 
 def _slope(y: np.ndarray, dt: float) -> float:
