@@ -25,6 +25,7 @@ import numpy as np
 
 WORKER = r"""
 import sys, time
+import vidiscover
 from vidiscover.analysis import PulseModel, analyze
 from vidiscover.params import preset
 if sys.argv[1] == "table2":
@@ -39,7 +40,7 @@ else:
 pm = PulseModel()
 for _ in range(5):
     analyze(rec, n_boot=0, pulse=pm)
-print("ready", flush=True)
+print("ready", vidiscover.__file__, flush=True)
 for line in sys.stdin:
     c, t = time.process_time(), time.perf_counter()
     analyze(rec, n_boot=0, pulse=pm)
@@ -57,12 +58,17 @@ def main(argv=None) -> int:
     procs = []
     for path in (a.a, a.b):
         env = dict(os.environ, PYTHONPATH=path)
+        # (run in the version's own directory: ``python -c`` puts the working
+        # directory first on the path, before PYTHONPATH)
         procs.append(subprocess.Popen([sys.executable, "-c", WORKER,
                                        "table2" if a.table2 else "bench_cli"],
                                       stdin=subprocess.PIPE, stdout=subprocess.PIPE,
-                                      text=True, env=env))
-    for pr in procs:
-        assert pr.stdout.readline().strip() == "ready"
+                                      text=True, env=env, cwd=path))
+    for pr, path in zip(procs, (a.a, a.b)):
+        ready, where = pr.stdout.readline().split()
+        assert ready == "ready" and os.path.realpath(where).startswith(
+            os.path.realpath(path)), (where, path)
+        print(f"{path}: {where}")
     load0 = os.getloadavg()
     wall = [[], []]
     cpu = [[], []]

@@ -84,8 +84,10 @@ def _leaves(obj, path: str, out: dict, seen: set) -> None:
 
 
 def dump(recs_path: str, out_path: str) -> None:
+    import vidiscover
     from vidiscover.analysis import PulseModel, analyze
 
+    print("vidiscover from", vidiscover.__file__)
     if os.path.exists(recs_path):
         with open(recs_path, "rb") as fh:
             cases = pickle.load(fh)
