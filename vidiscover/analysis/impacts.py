@@ -495,17 +495,29 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
         return _fill_in_place(sm, bad) if bad.any() else sm
 
     loads: list[tuple[int, np.ndarray]] = []    # resting-contact load steps (start, values)
+    # the last smoother input and its smoothing (a copy: neither changes after), from
+    # which the next smoothing computes again only the outputs about what changed
+    # (savgol_smooth's prev: the same values); not for long records (two more
+    # full-length arrays held)
+    last = None
+
+    def smoother(y):
+        nonlocal last
+        out = savgol_smooth(y, win, prev=last)
+        if n <= _REUSE_SAMPLES:
+            last = (y, out.copy())
+        return out
 
     def smoothed(prev=None):
         # the smoother over the smooth part, the resting-contact loads taken out before
         # and put back after (a load step blurred by the smoother leaves a residual of
         # half the step before the entry, of the sign opposite to the entry pulse)
         if not loads:
-            return savgol_smooth(smoother_input(prev), win)
+            return smoother(smoother_input(prev))
         if prev is not None:
             prev = _add_loads(prev.copy(), loads, -1.0)
         y = _add_loads(af - fit.render(), loads, -1.0)
-        return _add_loads(savgol_smooth(smoother_input(prev, y), win), loads, 1.0)
+        return _add_loads(smoother(smoother_input(prev, y)), loads, 1.0)
 
     def error_bridged():
         # the fitted pulses' peaks, and which of them have a learned model error beyond
@@ -560,7 +572,7 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
         return sm
 
     # round 0: the strong pulses over a first (pulse-contaminated) smooth part
-    base = savgol_smooth(smoother_input(), win)
+    base = smoother(smoother_input())
     sigma = noise_sigma(af, bad)
     resid = af - base
     resid[bad] = 0.0
@@ -584,13 +596,13 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
     fit.add(first)
     if fit.n:
         fit.backfit(base, iterations=1)
-        base = savgol_smooth(smoother_input(), win)
+        base = smoother(smoother_input())
         fit.backfit(base, iterations=1)
         if error_lags.size and error_bridged()[1].any():
             # strong pulses' model error beyond their main lobes: bridged from now on
             # (about the smooth part just made, see smoother_input)
             for _ in range(_BRIDGE_PASSES):
-                base = savgol_smooth(smoother_input(base), win)
+                base = smoother(smoother_input(base))
             fit.backfit(base, iterations=1)
         if fit_width:
             wider = _wider_pulse(fit, base, sigma)
@@ -604,13 +616,14 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
                 fit.wid = np.zeros(fit.n, dtype=np.int64)
                 fit.sigma = sigma
                 fit.backfit(base, iterations=1)
-                base = savgol_smooth(smoother_input(base), win)
+                base = smoother(smoother_input(base))
                 fit.backfit(base, iterations=1)
     # later rounds: the residual of the fitted pulses over the clean smooth part (weak
     # pulses hardly change the smooth part or the noise, so neither is recomputed);
     # then, when the ball comes to rest on a wall at the end of a chatter run, its load
     # is moved into the smooth part and the rounds run again
     rnd = 0
+    state0 = None
     while rnd < 2 * max_rounds:
         if rnd == max_rounds:
             if not (fit.n and load_ratio > 0):
@@ -633,7 +646,11 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
         resid -= base
         resid[bad] = 0.0
         if rnd == 0:
-            sigma = fit.sigma = robust_std(good_sample(resid, bad)) or sigma
+            noise0 = robust_std(good_sample(resid, bad))
+            sigma = fit.sigma = noise0 or sigma
+            # (the final noise below is this one when no later round changed the
+            # fitted pulses or the smooth part: the same residual)
+            state0 = (fit, fit.pos, fit.amp, fit.wid, base)
         z = fit.matched(resid)
         del resid
         z /= sigma
@@ -660,7 +677,10 @@ def _detect(rec, options: DetectionOptions | None, *, pulse, mu: float,
     smooth = smooth_part()
     resid = smooth - base
     resid[bad] = 0.0
-    sigma = fit.sigma = robust_std(good_sample(resid, bad)) or sigma
+    if state0 is None or any(a is not b for a, b in zip(state0, (fit, fit.pos, fit.amp,
+                                                                  fit.wid, base))):
+        noise0 = robust_std(good_sample(resid, bad))
+    sigma = fit.sigma = noise0 or sigma
     n_start = n_prev = fit.n
 
     def fresh_resid():
@@ -1955,6 +1975,7 @@ def _largest_near(pos: np.ndarray, amp: np.ndarray, idx: np.ndarray, tol: float 
 
 
 _BLOCK = 1 << 16          # samples per block of the element-wise full-length steps
+_REUSE_SAMPLES = 1 << 20  # the detector's smoothings reuse the last one up to this length
 
 
 def _matched(resid: np.ndarray, mf: list[np.ndarray]) -> np.ndarray:

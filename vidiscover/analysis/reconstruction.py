@@ -319,7 +319,8 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
     ti = t_imp - t[0]
     # states at the impacts: linear interpolation between the samples about them
     # (taken from each full-length array as soon as it is made, so it can be dropped)
-    k = np.clip(np.searchsorted(tr, ti, side="right") - 1, 0, n - 2)
+    # (integer clips by minimum/maximum: the same indices without np.clip's overhead)
+    k = np.minimum(np.maximum(np.searchsorted(tr, ti, side="right") - 1, 0), n - 2)
     f = (ti - tr[k]) * fs
     lin = lambda arr: arr[k] * (1 - f) + arr[k + 1] * f          # noqa: E731
     cdv = np.concatenate([[0.0], np.cumsum(dv)])
@@ -872,17 +873,20 @@ def _laser_rails(xl: np.ndarray, ok: np.ndarray) -> np.ndarray | None:
     """
     if not ok.any():
         return None
-    v = xl[ok]
+    every = bool(ok.all())              # (the usual case: no masked copies)
+    v = xl if every else xl[ok]
     out = None
     for ext in (float(v.max()), float(v.min())):
-        at = ok & (xl == ext)
-        if at.sum() < _RAIL_RUN:
+        at = xl == ext
+        if not every:
+            at &= ok
+        if np.count_nonzero(at) < _RAIL_RUN:
             continue
         edges = np.diff(np.r_[0, at.view(np.int8), 0])
         runs = np.flatnonzero(edges < 0) - np.flatnonzero(edges > 0)
         if runs.max() >= _RAIL_RUN:
             out = at if out is None else out | at
-    if out is not None and out.sum() >= ok.sum():
+    if out is not None and np.count_nonzero(out) >= np.count_nonzero(ok):
         return None                      # a constant laser: nothing else to pin to
     return out
 
@@ -943,7 +947,8 @@ def _first_samples(t: np.ndarray, ti: np.ndarray, fs: float) -> np.ndarray:
     """
     n = t.size
     first = np.minimum(np.floor(ti * fs).astype(np.int64) + 1, n)
-    first += (first < n) & (first > 0) & ((t[np.clip(first - 1, 0, n - 1)] - t[0]) > ti)
+    first += (first < n) & (first > 0) & ((t[np.minimum(np.maximum(first - 1, 0), n - 1)]
+                                            - t[0]) > ti)
     return first
 
 
@@ -1009,8 +1014,9 @@ def _flights(t_imp, side, x_imp, y_imp, v_minus, b, mu, t, x_f, acc, fs, stick_t
     mug = mu * G_ACCEL
 
     # ---- stick-then-fly candidates: opposite walls, start wall holds the ball at t_s+
-    cs = np.clip(np.searchsorted(t, ts, side="right"), 0, t.size - 1)
-    ce = np.clip(np.searchsorted(t, te, side="left") - 1, 0, t.size - 1)
+    # (integer clips by minimum/maximum: the same indices without np.clip's overhead)
+    cs = np.minimum(np.searchsorted(t, ts, side="right"), t.size - 1)      # (>= 0)
+    ce = np.minimum(np.maximum(np.searchsorted(t, te, side="left") - 1, 0), t.size - 1)
     a_start = acc[cs]
     # (the LO's acceleration against the ball's own along the base, g0: thresholds
     # moved by g0 rather than a full-length acc - g0)
@@ -1029,7 +1035,8 @@ def _flights(t_imp, side, x_imp, y_imp, v_minus, b, mu, t, x_f, acc, fs, stick_t
             first_go = _first_where(lambda lo, hi, s=sgn: s * acc[lo:hi] > mug + s * g0,
                                     cs[sel], ce[sel])
             inside = first_go > 0
-            kk = np.clip(np.where(first_go >= 0, first_go, t.size), 1, t.size - 1)
+            kk = np.minimum(np.maximum(np.where(first_go >= 0, first_go, t.size), 1),
+                            t.size - 1)
             a0, a1 = acc[kk - 1], acc[kk]
             with np.errstate(divide="ignore", invalid="ignore"):
                 fr = np.clip(np.where(a1 != a0, (thr - a0) / (a1 - a0), 0.0), 0.0, 1.0)
