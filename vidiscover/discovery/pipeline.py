@@ -357,12 +357,34 @@ def _worker_start() -> None:
 def _fitting_imports() -> None:
     """Load what the flight and impact laws need and the analyses do not.
 
-    About 0.5-1 s: pysindy brings scikit-learn and scipy.stats.
+    About 0.5-1 s: pysindy brings scikit-learn and scipy.stats. Then one tiny
+    library and threshold sweep (:func:`_warm_fitting`), so that the processes forked
+    after it do not each pay the first call's costs.
     """
     with gc_paused():
         import pysindy  # noqa: F401
         import scipy.optimize  # noqa: F401
         import scipy.special  # noqa: F401
+
+        _warm_fitting()
+
+
+def _warm_fitting() -> None:
+    """Pay the one-time costs of the first pysindy fit in this process.
+
+    scikit-learn's input check (run by every pysindy optimizer) looks up the installed
+    dataframe plugins (entry points of every installed distribution) on its first call
+    in a process, and pysindy and scikit-learn fill caches (signatures, parameter
+    validation) on theirs: about 40-60 ms of CPU that the flight law here and each
+    impact-law worker forked later paid again, in the law phase, where the three
+    share two cores. Done once here, before the law workers fork, they inherit it.
+    Nothing of it reaches a result (no random state, no setting).
+    """
+    from .sparse import library_matrix, threshold_sweep
+
+    x = np.linspace(0.5, 1.0, 8)
+    X = library_matrix(x, ("v", "v^2"), {"v": lambda v: v, "v^2": np.square})
+    threshold_sweep(X, 0.9 - 0.1 * x, (0.05,), sr3_thresholds=(0.05,))
 
 
 def _analysis_imports() -> None:
