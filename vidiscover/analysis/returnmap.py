@@ -248,10 +248,12 @@ class FeatureContext:
         t0 = float(detection.t0)
         sat = None
         if recording is not None:
-            from .impacts import saturated_samples
+            mask = getattr(detection, "saturated", None)   # the detector's, when it gave it
+            if mask is None:
+                from .impacts import saturated_samples
 
-            sat = np.asarray(recording.t, dtype=float)[
-                saturated_samples(np.asarray(recording.a, dtype=float), detection.bad)]
+                mask = saturated_samples(np.asarray(recording.a, dtype=float), detection.bad)
+            sat = np.asarray(recording.t, dtype=float)[mask]
         return cls(t=detection.t, side=detection.side, dv=detection.dv, t_start=t0,
                    t_end=t0 + detection.n_samples / detection.sample_rate, forcing=forcing,
                    ts=reconstruction.t, x=reconstruction.x_impacts, returnmap=returnmap,
