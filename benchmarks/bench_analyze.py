@@ -16,7 +16,9 @@ code before, interleaved, 300 pairs, CPU 9.8 -> 8.9 ms (0.90), within the spread
 separate runs, 8.3-9.6 ms for either); on the next stop's machine (2026-11-27, a slower
 and noisier VM of the same kind) 12.5 ms best at ee2348a against 12.3 best for the code
 before (68482a7), separate runs on the idle machine, medians 12.8-19 ms bimodal for
-either: no change of the code's speed, a slower machine), ``N``
+either: no change of the code's speed, a slower machine; 12.0 ms best, 13.0 median, at
+604270c on that machine, after robust_std's selection and the smoother's reuse, a9badde
+and before, bit-identical results), ``N``
 runs after one warm-up, median
 and best wall-clock time and the best CPU time, with the bootstrap at its default
 (``n_boot=1000``) and small (100, 0), printed next to DESIGN.md section 8's 6 ms target

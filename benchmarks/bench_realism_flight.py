@@ -36,7 +36,11 @@ plain names).
 Figures are quoted on the held-back ``holdout15`` split (``test`` and ``holdout`` to
 ``holdout14`` were looked at case by case); ``--split dev`` is for tuning.
 
-Measured (holdout14, 60 cases, run once, 2026-11-27, at ee2348a): identified 4, all within
+Measured (holdout15, 60 cases, run once, 2026-11-27, at 604270c): identified 4, all within
+(0.067; target 0.9: 019, 024, 033, 047), outside 0, bad 0, failed 0; refused 56: friction
+or inclination undetermined 34, weak form misfit 16, the law moves between recordings 4,
+placement in the contact 1, wall pulse areas 1.
+Earlier (holdout14, at ee2348a): identified 4, all within
 (0.067; target 0.9: 000, 003, 007, 040), outside 0, bad 0; 2 input errors (044, 049: 7 and
 0 usable impacts); refused 54: friction or inclination undetermined 25, weak form misfit
 21, placement in the contact 4, the law moves between recordings 3, wall pulse areas 1.
