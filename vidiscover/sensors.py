@@ -30,6 +30,7 @@ from dataclasses import asdict, dataclass, field
 
 import numpy as np
 
+from ._threads import one_blas_thread
 from .acquisition import CHEBY1_RIPPLE_DB, max_cutoff, pulse_kernel
 from .errors import InputError
 from .params import G_ACCEL
@@ -570,19 +571,6 @@ def _odd_pad(u: np.ndarray, before: int, after: int) -> np.ndarray:
     return np.concatenate(parts, axis=-1) if len(parts) > 1 else u
 
 
-@functools.lru_cache(maxsize=1)
-def _blas_controller():
-    """The native thread pools as threadpoolctl sees them, looked up once.
-
-    ``threadpool_limits`` looks the libraries up afresh on every call (~0.4 ms, a
-    scan of the process's memory map); numpy's BLAS, the one limited here, is loaded
-    with numpy, before the first call.
-    """
-    from threadpoolctl import ThreadpoolController
-
-    return ThreadpoolController()
-
-
 #: Mismatch at an interval's midpoint beyond which it is evaluated at every oversampled
 #: instant instead of interpolated: LO displacement (m), velocity (m/s), acceleration.
 _SMOOTH_TOL = (1e-11, 1e-9, 1e-5)
@@ -648,7 +636,7 @@ def _os_signals(result, st, fs: float, n: int, big: int, n_pre: int):
     # one BLAS thread: these products have an inner dimension of 3-6, and a
     # multi-threaded BLAS is 10-30x slower on them on a busy machine
     # the products are written in place (x[:-1] holds one row of `big` per interval)
-    with _blas_controller().limit(limits=1, user_api="blas"):
+    with one_blas_thread():
         np.matmul(coef, bx.T, out=x[:-1].reshape(-1, big))
         np.matmul(coef, bv.T, out=v[1:-1].reshape(-1, big))
         np.matmul(knots_mid, lag, out=xe[:-1].reshape(-1, big))

@@ -66,8 +66,8 @@ import time
 from dataclasses import dataclass, field, replace
 
 import numpy as np
-from threadpoolctl import threadpool_limits
 
+from .._threads import one_blas_thread
 from ..acquisition import (
     CAUSAL_KINDS,
     FILTER_KINDS,
@@ -1066,7 +1066,7 @@ def learn_pulse(a: np.ndarray, fs: float, bad: np.ndarray | None = None, *,
     # the search's hundreds of small matrix products (tens of rows): a BLAS thread pool
     # costs more than it gives there (2.0 s instead of 5.8 s with one thread on a loaded
     # 2-core machine, the same results)
-    with threadpool_limits(limits=1, user_api="blas"):
+    with one_blas_thread():
         results = _learn(obj, kinds, fs, halfwidth)
         best = results[0][1]
         _, shift, amp = obj.fit(best)
