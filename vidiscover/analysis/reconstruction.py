@@ -319,8 +319,7 @@ def reconstruct(det: ImpactDetection, rec, b: float | None = None, mu: float = 0
     ti = t_imp - t[0]
     # states at the impacts: linear interpolation between the samples about them
     # (taken from each full-length array as soon as it is made, so it can be dropped)
-    # (integer clips by minimum/maximum: the same indices without np.clip's overhead)
-    k = np.minimum(np.maximum(np.searchsorted(tr, ti, side="right") - 1, 0), n - 2)
+    k = _clip_index(np.searchsorted(tr, ti, side="right") - 1, 0, n - 2)
     f = (ti - tr[k]) * fs
     lin = lambda arr: arr[k] * (1 - f) + arr[k + 1] * f          # noqa: E731
     cdv = np.concatenate([[0.0], np.cumsum(dv)])
@@ -939,6 +938,11 @@ def _jump_times(det: ImpactDetection, ti: np.ndarray) -> np.ndarray:
     return np.maximum.accumulate(ti + c)
 
 
+def _clip_index(k: np.ndarray, lo: int, hi: int) -> np.ndarray:
+    """Integer indices ``k`` held to ``[lo, hi]``: ``np.clip``'s result without its overhead."""
+    return np.minimum(np.maximum(k, lo), hi)
+
+
 def _first_samples(t: np.ndarray, ti: np.ndarray, fs: float) -> np.ndarray:
     """Index of the first sample strictly after each impact (``ti`` from ``t[0]``).
 
@@ -947,8 +951,7 @@ def _first_samples(t: np.ndarray, ti: np.ndarray, fs: float) -> np.ndarray:
     """
     n = t.size
     first = np.minimum(np.floor(ti * fs).astype(np.int64) + 1, n)
-    first += (first < n) & (first > 0) & ((t[np.minimum(np.maximum(first - 1, 0), n - 1)]
-                                            - t[0]) > ti)
+    first += (first < n) & (first > 0) & ((t[_clip_index(first - 1, 0, n - 1)] - t[0]) > ti)
     return first
 
 
@@ -1014,9 +1017,8 @@ def _flights(t_imp, side, x_imp, y_imp, v_minus, b, mu, t, x_f, acc, fs, stick_t
     mug = mu * G_ACCEL
 
     # ---- stick-then-fly candidates: opposite walls, start wall holds the ball at t_s+
-    # (integer clips by minimum/maximum: the same indices without np.clip's overhead)
     cs = np.minimum(np.searchsorted(t, ts, side="right"), t.size - 1)      # (>= 0)
-    ce = np.minimum(np.maximum(np.searchsorted(t, te, side="left") - 1, 0), t.size - 1)
+    ce = _clip_index(np.searchsorted(t, te, side="left") - 1, 0, t.size - 1)
     a_start = acc[cs]
     # (the LO's acceleration against the ball's own along the base, g0: thresholds
     # moved by g0 rather than a full-length acc - g0)
@@ -1035,8 +1037,7 @@ def _flights(t_imp, side, x_imp, y_imp, v_minus, b, mu, t, x_f, acc, fs, stick_t
             first_go = _first_where(lambda lo, hi, s=sgn: s * acc[lo:hi] > mug + s * g0,
                                     cs[sel], ce[sel])
             inside = first_go > 0
-            kk = np.minimum(np.maximum(np.where(first_go >= 0, first_go, t.size), 1),
-                            t.size - 1)
+            kk = _clip_index(np.where(first_go >= 0, first_go, t.size), 1, t.size - 1)
             a0, a1 = acc[kk - 1], acc[kk]
             with np.errstate(divide="ignore", invalid="ignore"):
                 fr = np.clip(np.where(a1 != a0, (thr - a0) / (a1 - a0), 0.0), 0.0, 1.0)

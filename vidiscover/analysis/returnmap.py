@@ -248,7 +248,7 @@ class FeatureContext:
         t0 = float(detection.t0)
         sat = None
         if recording is not None:
-            mask = getattr(detection, "saturated", None)   # the detector's, when it gave it
+            mask = detection.saturated               # the detector's, when it gave it
             if mask is None:
                 from .impacts import saturated_samples
 
