@@ -33,8 +33,8 @@ settling included, is kept): how long a user must record for the law to be ident
 The cache keys the analyses by it (``<case>-p<N>.pkl``; the corpus's 40 keep their
 plain names).
 
-Figures are quoted on the held-back ``holdout15`` split (``test`` and ``holdout`` to
-``holdout14`` were looked at case by case); ``--split dev`` is for tuning.
+Figures are quoted on the held-back ``holdout16`` split (``test`` and ``holdout`` to
+``holdout15`` were looked at case by case); ``--split dev`` is for tuning.
 
 Measured (holdout15, 60 cases, run once, 2026-11-27, at 604270c): identified 4, all within
 (0.067; target 0.9: 019, 024, 033, 047), outside 0, bad 0, failed 0; refused 56: friction
@@ -90,7 +90,7 @@ move theta by 0.2-1.6 deg (dev-000/002/007): the jumps, not the estimator, limit
 
 Usage::
 
-    python benchmarks/bench_realism_flight.py [--split holdout15] [--n 60] [--start 0]
+    python benchmarks/bench_realism_flight.py [--split holdout16] [--n 60] [--start 0]
         [--cache DIR] [--oracle] [--periods 40]
 """
 
@@ -223,6 +223,12 @@ def score_case(case, cache: str | None = None, oracle: bool = False) -> dict:
                    bad=bool(res.mu < 0 or abs(res.theta_deg) > 10.0))
     else:
         row.update(within=False, bad=False)
+    lo = res.lo_friction
+    row.update(lo_identified=bool(lo is not None and lo.identified),
+               lo_mu=float(lo.mu) if lo is not None else np.nan,
+               lo_se=float(lo.mu_se) if lo is not None else np.nan,
+               lo_reason=lo.reason if lo is not None else "")
+    row["lo_within"] = bool(row["lo_identified"] and abs(row["lo_mu"] - case.mu) <= MU_TOL)
     if oracle:
         for key, recs in zip(("oracle_jumps", "oracle_equivalent"), oracle_flights(case, outs),
                              strict=True):
@@ -236,7 +242,7 @@ def score_case(case, cache: str | None = None, oracle: bool = False) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout15", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout16", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--cache", default=None,
@@ -270,8 +276,11 @@ def main() -> None:
                     f"{str(r['reason'])[:40]}")
         got += (f" [misfit {r['misfit']:.2%} prec {r['precision']:.2%} se {r['mu_se']:.3f}/"
                 f"{r['theta_se']:.2f}]")
+        lo = (f"LO mu {r['lo_mu']:.3f}+/-{r['lo_se']:.3f} "
+              f"{'ok' if r['lo_within'] else 'WRONG'}" if r["lo_identified"]
+              else f"LO n.i. ({r['lo_reason'][:30]})")
         print(f"  {r['name']} true mu {r['mu']:.3f} theta {r['theta']:.2f} -> {got} "
-              f"{'ok' if r['within'] else ('BAD' if r['bad'] else 'miss')} "
+              f"{'ok' if r['within'] else ('BAD' if r['bad'] else 'miss')}; {lo} "
               f"({r['seconds']:.1f} s)", flush=True)
         if args.oracle:
             print(f"      truth jumps: {r['oracle_jumps']} ({r['oracle_jumps_fit']}); "
@@ -288,6 +297,14 @@ def main() -> None:
     for r in wrong:
         print(f"  outside: {r['name']} mu {r['mu_est']:.3f} vs {r['mu']:.3f}, theta "
               f"{r['theta_est']:.2f} vs {r['theta']:.2f}")
+    lo_id = [r for r in rows if r.get("lo_identified")]
+    lo_wrong = [r for r in lo_id if not r["lo_within"]]
+    print(f"friction from the LO's reaction (pooled, beside the law): identified "
+          f"{len(lo_id)}, within mu 0.03 {len(lo_id) - len(lo_wrong)}, outside "
+          f"{len(lo_wrong)}; negative reported {sum(r['lo_mu'] < 0 for r in lo_id)}")
+    for r in lo_wrong:
+        print(f"  LO outside: {r['name']} mu {r['lo_mu']:.3f} +/- {r['lo_se']:.3f} vs "
+              f"{r['mu']:.3f}")
     if args.oracle:
         for key, label in (("oracle_jumps", "truth jumps"),
                            ("oracle_equivalent", "truth jumps + equivalent impacts")):

@@ -3,6 +3,7 @@
 * :mod:`.signals` -- input checks, bad samples, robust noise, forcing fit;
 * :mod:`.impacts` -- stage 1, impacts as pulses in the LO acceleration;
 * :mod:`.friction` -- ball flights with or without Coulomb friction (eqs. 6, 8);
+* :mod:`.lo_reaction` -- friction read from the LO's acceleration between impacts;
 * :mod:`.reconstruction` -- stage 2, LO velocity, ball position, flight segments;
 * :mod:`.restitution` -- stage 3, r per impact (eq. 9), per wall, mu table;
 * :mod:`.returnmap` -- stage 4, first return map and the feature sets;

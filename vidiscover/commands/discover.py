@@ -179,6 +179,13 @@ def human_lines(doc: dict) -> list[str]:
                      f"[{_fmt(fl['mu_ci'][0])}, {_fmt(fl['mu_ci'][1])}], theta = "
                      f"{_fmt(fl['theta_deg'], '.4g')} deg [{_fmt(fl['theta_ci'][0])}, "
                      f"{_fmt(fl['theta_ci'][1])}]")
+    lo = fl.get("lo_friction")
+    if lo and lo.get("identified"):
+        lines.append(f"  friction from the LO's reaction: mu = {_fmt(lo['mu'])} +/- "
+                     f"{_fmt(lo['mu_se'], '.2g')} (standard error; independent of the "
+                     "pulse areas)")
+    elif lo:
+        lines.append(f"  friction from the LO's reaction: not identified ({lo['reason']})")
     for side in ("right", "left"):
         law = doc["impact_law"][side]
         cis = ", ".join(f"{t}: {_fmt(c['value'], '.4g')} [{_fmt(c['ci'][0], '.4g')}, "

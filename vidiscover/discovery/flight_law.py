@@ -148,6 +148,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..analysis.flights import STEPS, FlightData, reconstruct_flights, solve_free_flights
+from ..analysis.lo_reaction import LoReaction, lo_reaction_of, pooled_lo_reaction
 from ..errors import InputError
 from ..params import G_ACCEL
 from .sparse import (
@@ -361,6 +362,12 @@ class FlightLawResult:
         The raw fit (``mu``, ``theta_deg``, ``terms``, ``coefficients``,
         ``equation``, ``mu_ci``, ``theta_ci``) whether identified or not; not a
         result when ``identified`` is False.
+    lo_friction : LoReaction or None
+        Friction read from the LO's own acceleration between impacts (the reaction of
+        the ball's friction, :mod:`vidiscover.analysis.lo_reaction`), pooled over the
+        recordings: a measurement independent of the pulse areas, reported beside the
+        law (its own ``identified`` and ``reason``); None when the inputs carry no
+        recording (FlightData given).
     """
 
     mu: float
@@ -388,6 +395,7 @@ class FlightLawResult:
     reason: str | None = None
     max_tilt_deg: float = MAX_TILT_DEG
     diagnostic: dict = field(default_factory=dict)
+    lo_friction: LoReaction | None = None
 
     def __post_init__(self) -> None:
         if len(self.terms) != len(self.coefficients):
@@ -471,7 +479,9 @@ class FlightLawResult:
                     "equation": diag.get("equation", ""),
                     "mu_ci": [_num(v) for v in diag.get("mu_ci", (math.nan, math.nan))],
                     "theta_ci": [_num(v) for v in diag.get("theta_ci",
-                                                           (math.nan, math.nan))]}}
+                                                           (math.nan, math.nan))]},
+                "lo_friction": (None if self.lo_friction is None
+                                else self.lo_friction.to_dict())}
 
 
 def _num(v):
@@ -1217,6 +1227,8 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
         raise InputError(f"penetration must be 'free' or 'learned', was {penetration!r}")
     depth_free = penetration == "free"
     entries = [a if isinstance(a, FlightData) else FlightData.of(a) for a in analyses]
+    lo = (pooled_lo_reaction([lo_reaction_of(a) for a in analyses])
+          if not any(isinstance(a, FlightData) for a in analyses) else None)
     # compliant contacts: the tents between the equivalent instantaneous impacts
     records = ([rec.equivalent_impacts() for rec in entries] if _compliant(entries)
                else entries)
@@ -1411,7 +1423,7 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
                   iterations=it, residual_rms=float(np.sqrt(np.mean(resid ** 2))),
                   collinearity=cos, misfit=misfit, precision=precision, mu_se=mu_se,
                   theta_se=theta_se, max_tilt_deg=float(max_tilt_deg),
-                  diagnostic=diagnostic)
+                  diagnostic=diagnostic, lo_friction=lo)
     if reasons:
         return FlightLawResult(mu=math.nan, theta_deg=math.nan, terms=[], coefficients=[],
                                mu_ci=(math.nan, math.nan), theta_ci=(math.nan, math.nan),
