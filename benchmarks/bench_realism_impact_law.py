@@ -35,7 +35,7 @@ law so that the impact law is scored on its own:
   at 1.4 times the speed is honest; one whose band is narrow and wrong is not. The
   target line is the strict share.
 
-Figures are quoted on the ``holdout15`` split (see :mod:`vidiscover.corpus`).
+Figures are quoted on the ``holdout16`` split (see :mod:`vidiscover.corpus`).
 Measured (holdout15, 60 cases, run once, 2026-11-27, at 604270c): constant-r walls reported
 constant 0.983 of 60 (040 right read 1 - 0.4817 v^0.2: a Kelvin-Voigt record behind a
 Bessel whose impacts are timed 0.24 ms late); Hunt-Crossley walls within 0.03 at the third
@@ -96,7 +96,7 @@ the sensors or the analysis change.
 
 Usage::
 
-    python benchmarks/bench_realism_impact_law.py [--split holdout15] [--n 60] [--n-boot 200]
+    python benchmarks/bench_realism_impact_law.py [--split holdout16] [--n 60] [--n-boot 200]
         [--cache DIR]
 """
 
@@ -258,7 +258,7 @@ def band_half_width(law, v: np.ndarray, r: np.ndarray) -> tuple[np.ndarray, np.n
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--split", default="holdout15", choices=sorted(N_CASES))
+    ap.add_argument("--split", default="holdout16", choices=sorted(N_CASES))
     ap.add_argument("--n", type=int, default=60)
     ap.add_argument("--start", type=int, default=0, help="first case index")
     ap.add_argument("--n-boot", type=int, default=200,

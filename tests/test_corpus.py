@@ -14,7 +14,7 @@ def test_cases_are_a_pure_function_of_split_and_index():
               for name in ("dev", "test", "holdout", "holdout2", "holdout3",
                            "holdout4", "holdout5", "holdout6", "holdout7", "holdout8",
                            "holdout9", "holdout10", "holdout11", "holdout12",
-                           "holdout13", "holdout14", "holdout15")]
+                           "holdout13", "holdout14", "holdout15", "holdout16")]
     for i, one in enumerate(splits):
         assert len(one) == 8
         for other in splits[i + 1:]:

@@ -62,6 +62,9 @@ same on every machine and in every process. The split is fixed and documented:
   came from here, under the same rule;
 * ``"holdout15"`` (96 cases, a seventeenth stream): opened when ``holdout14`` had been run
   for one stop's quotes and its misses read (2026-11-27, fourteenth stop); later quotes
+  came from here, under the same rule;
+* ``"holdout16"`` (96 cases, an eighteenth stream): opened when ``holdout15`` had been run
+  for one stop's quotes and its misses read (2026-11-27, fifteenth stop); later quotes
   come from here, under the same rule.
 
 The base amplitude is chosen so that the ball impacts: the linear LO response is
@@ -101,7 +104,7 @@ SPLITS: Mapping[str, int] = {"dev": 1, "test": 2, "holdout": 3, "holdout2": 4,
                              "holdout9": 11, "holdout10": 12,
                              "holdout11": 13, "holdout12": 14,
                              "holdout13": 15, "holdout14": 16,
-                             "holdout15": 17}
+                             "holdout15": 17, "holdout16": 18}
 #: Number of cases of each split.
 N_CASES: Mapping[str, int] = {"dev": 96, "test": 96, "holdout": 96, "holdout2": 96,
                               "holdout3": 96, "holdout4": 96, "holdout5": 96,
@@ -109,7 +112,7 @@ N_CASES: Mapping[str, int] = {"dev": 96, "test": 96, "holdout": 96, "holdout2": 
                               "holdout9": 96, "holdout10": 96,
                               "holdout11": 96, "holdout12": 96,
                               "holdout13": 96, "holdout14": 96,
-                              "holdout15": 96}
+                              "holdout15": 96, "holdout16": 96}
 #: Number of dev cases the test suite runs (the first ones of the split).
 N_SUITE = 24
 
