@@ -3,7 +3,7 @@
 The ball's flights tell friction only through the velocity jumps at the impacts, and
 in flights of equal duration its integrals cancel (the weak form of
 :mod:`vidiscover.discovery.flight_law` then confounds it with the inclination). The
-LO feels it directly: between impacts (DESIGN.md section 1)::
+LO feels it directly: between impacts (the model of the README)::
 
     x'' = -(k1/m1) (x - xe) - (c1/m1) (x' - xe') + (m2/m1) mu g sgn(z')
 
