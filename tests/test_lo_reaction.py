@@ -119,3 +119,21 @@ def test_realism_corpus_dev_cases():
             assert abs(pooled.mu - case.mu) < 0.02, (case.name, pooled.mu, case.mu)
         else:   # the soft Hunt-Crossley contacts behind a linear-phase filter
             assert "stiffness" in pooled.reason
+
+
+def test_the_flight_law_takes_the_lo_friction_only_with_three_recordings():
+    """Pooled (3 clearances) the LO's mu joins the fit; alone it is only reported."""
+    from vidiscover.discovery.flight_law import discover_flight_law
+
+    outs = [_exact(b, ["coulomb_friction=0.1", "inclination=1.0"])
+            for b in (0.006, 0.0075, 0.009)]
+    pooled = discover_flight_law(outs, n_boot=0)
+    assert pooled.identified, pooled.reason
+    assert "lo_prior" in pooled.diagnostic and pooled.lo_friction.identified
+    assert abs(pooled.mu - 0.1) < 0.005 and abs(pooled.theta_deg - 1.0) < 0.05
+    alone = discover_flight_law(outs[1:2], n_boot=0)
+    assert "lo_prior" not in alone.diagnostic and alone.lo_friction is not None
+    # the same law without the LO's reading: the prior did not move a determined law
+    free = discover_flight_law(outs, n_boot=0, lo_friction=False)
+    assert free.lo_friction is not None and "lo_prior" not in free.diagnostic
+    assert abs(free.mu - pooled.mu) < 0.005

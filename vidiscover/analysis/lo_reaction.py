@@ -44,7 +44,7 @@ Examples
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.signal import savgol_filter
@@ -83,6 +83,12 @@ class LoReaction:
     identified : bool
     reason : str
         Why not identified ("" when identified).
+    areas, area_se : ndarray or None
+        The LO velocity jump at every impact (m/s; one recording, identified): the
+        acceleration less the fitted LO model, summed over the impact's window; no
+        pulse shape is assumed, so a filter's or a contact's shape does not bias it.
+        Its standard error from the noise left by the model (``area_se``). None when
+        pooled or not identified; NaN where the window holds a bad sample.
     """
 
     mu: float
@@ -94,6 +100,8 @@ class LoReaction:
     n_flights: int = 0
     identified: bool = True
     reason: str = ""
+    areas: np.ndarray | None = field(default=None, repr=False, compare=False)
+    area_se: np.ndarray | None = field(default=None, repr=False, compare=False)
 
     @classmethod
     def refused(cls, reason: str, **kw) -> LoReaction:
@@ -220,7 +228,23 @@ def lo_reaction(t: np.ndarray, x: np.ndarray, a: np.ndarray, xe: np.ndarray, *,
     meat = score.T @ score * (g / max(g - 1, 1))
     cov = bread @ meat @ bread
     se = math.sqrt(max(float(cov[3, 3]), 0.0)) / scale[3]
-    return LoReaction(mu=float(coef[3]) * to_mu, mu_se=se * to_mu, **common)
+    # the LO's velocity jump at every impact: the acceleration less the LO model, summed
+    # over the impact's window (cut at the midpoints to its neighbours)
+    model = np.column_stack([xs - es, vx - ve, np.ones(n), sg]) @ coef
+    rest = np.asarray(a, float) - model
+    noise = 1.4826 * float(np.median(np.abs(rest[keep] - np.median(rest[keep]))))
+    cum = np.concatenate([[0.0], np.cumsum(np.nan_to_num(rest))])
+    badc = np.concatenate([[0], np.cumsum(~np.isfinite(rest) | (np.zeros(n, bool) if bad is None
+                                                              else np.asarray(bad, bool)))])
+    mid = (idx[:-1] + idx[1:]) // 2
+    lo_i = np.maximum(np.clip(idx - pre, 0, n), np.concatenate([[0], mid]))
+    hi_i = np.minimum(np.clip(idx + post, 0, n), np.concatenate([mid, [n]]))
+    hi_i = np.maximum(hi_i, lo_i)
+    areas = (cum[hi_i] - cum[lo_i]) / fs
+    areas[(badc[hi_i] - badc[lo_i]) > 0] = np.nan
+    area_se = noise * np.sqrt(hi_i - lo_i) / fs
+    return LoReaction(mu=float(coef[3]) * to_mu, mu_se=se * to_mu, areas=areas,
+                      area_se=area_se, **common)
 
 
 def lo_reaction_of(analysis) -> LoReaction:
