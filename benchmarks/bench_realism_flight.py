@@ -36,7 +36,13 @@ plain names).
 Figures are quoted on the held-back ``holdout16`` split (``test`` and ``holdout`` to
 ``holdout15`` were looked at case by case); ``--split dev`` is for tuning.
 
-Measured (holdout15, 60 cases, run once, 2026-11-27, at 604270c): identified 4, all within
+Measured (holdout16, 60 cases, run once, 2026-11-27, at 99efb4c, the LO's friction joining
+the fit): identified 7, within 6 (0.100; target 0.9: 003, 004, 029, 035, 039, 051), outside
+1 (032: theta 0.63 for 0.00 deg, standard error 0.07; Kelvin-Voigt walls of unequal
+stiffness; the same without the LO's friction, diagnosed after the run), bad 0, failed 0.
+The LO's friction beside the law: identified 29, within 28, outside 1 (056: 0.240 +/- 0.003
+for 0.272, Hunt-Crossley walls behind a linear-phase filter).
+Earlier (holdout15, at 604270c): identified 4, all within
 (0.067; target 0.9: 019, 024, 033, 047), outside 0, bad 0, failed 0; refused 56: friction
 or inclination undetermined 34, weak form misfit 16, the law moves between recordings 4,
 placement in the contact 1, wall pulse areas 1.

@@ -36,7 +36,14 @@ law so that the impact law is scored on its own:
   target line is the strict share.
 
 Figures are quoted on the ``holdout16`` split (see :mod:`vidiscover.corpus`).
-Measured (holdout15, 60 cases, run once, 2026-11-27, at 604270c): constant-r walls reported
+Measured (holdout16, 60 cases, run once, 2026-11-27, at 99efb4c): constant-r walls reported
+constant 1.000 of 58; Hunt-Crossley walls within 0.03 at the third clearance 0.931 of 58
+(054 both walls rms 0.040 / 0.059 and 042 right 0.039, read constant from clearances of
+nearly one speed, bands up to 0.18 / 0.06 / 0.07: not identified there; 015 left rms
+0.031, read 0.8246 - 0.02317 v^2 with a band of 0.017: wrong and confident); within 0.03 at
+0.981 of the 52 walls whose band is <= 0.03 somewhere; true r inside the 95 % band at
+0.907 of 3101 impacts.
+Earlier (holdout15, at 604270c): constant-r walls reported
 constant 0.983 of 60 (040 right read 1 - 0.4817 v^0.2: a Kelvin-Voigt record behind a
 Bessel whose impacts are timed 0.24 ms late); Hunt-Crossley walls within 0.03 at the third
 clearance 0.983 of 60 (024 right rms 0.058, read constant 0.853 from two clearances of

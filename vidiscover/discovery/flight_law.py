@@ -1340,7 +1340,7 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
     # the LO's mu joins the fit only where the leave-one-recording-out check can see a
     # bias the flights' confound hid: 3 recordings or more (the exact engine's 7.5 mm
     # alone gives theta 1.5 deg off with the LO's mu, within its standard errors)
-    groups, counts = np.unique(tents.rows[:, 0], return_counts=True)
+    _, counts = np.unique(tents.rows[:, 0], return_counts=True)
     prior = (lo if lo_friction and lo is not None and lo.identified and not tents.transformed
              and int(np.sum(counts >= 3)) >= 3 else None)
     if prior is not None:
