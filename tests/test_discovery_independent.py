@@ -35,19 +35,17 @@ def _true_r(name: str, side: str) -> float:
 def test_pooled_p04_p06_flight_law_within_tolerance():
     """The weak form's misfit is judged against the precision of the jumps measured in
     these recordings (~1-3 % behind causal filters and compliant walls), not a fixed
-    1 %: measured mu 0.104, theta 0.720 deg against 0.1 and 0.8 with the LO's friction
-    (0.102 +/- 0.004) as one more measurement, 0.121 / 0.786 deg without it."""
+    1 %: measured mu 0.121, theta 0.786 deg against 0.1 and 0.8 (leave-one-recording-out
+    spread 0.0066 / 0.085 deg; an earlier version read 0.1008 / 0.714). The flights
+    determine mu here, so the LO's friction (0.102 +/- 0.004) is reported beside the law,
+    not used in it."""
     key = load(POOL[0])[1]["setup"]
-    analyses = [_analysis(n) for n in POOL]
-    res = discover_flight_law(analyses, n_boot=50)
+    res = discover_flight_law([_analysis(n) for n in POOL], n_boot=50)
     assert res.identified, res.reason
     assert abs(res.mu - key["mu"]) <= 0.03 and abs(res.theta_deg - key["theta_deg"]) <= 0.3
-    # the LO's reading is reported and used: mu within 0.01 of truth (0.121 without it)
     assert res.lo_friction.identified and abs(res.lo_friction.mu - key["mu"]) < 0.01
-    assert abs(res.mu - key["mu"]) < 0.01
-    alone = discover_flight_law(analyses, n_boot=0, lo_friction=False)
-    assert alone.identified and abs(alone.mu - key["mu"]) > 0.015
-    assert res.to_dict()["lo_friction"]["identified"] is True
+    doc = res.to_dict()
+    assert doc["lo_friction"]["identified"] is True and doc["lo_friction_used"] is False
 
 
 @pytest.mark.slow
