@@ -38,7 +38,8 @@ Figures are quoted on the held-back ``holdout16`` split (``test`` and ``holdout`
 
 Measured (holdout16, 60 cases, 2026-11-27, at 99efb4c and again at 48d06b8 after the rule
 for the LO's friction changed (it joins the fit only where the flights confound mu and
-theta; the change came from an exact-engine unit test), both runs alike): identified 7, within 6 (0.100; target 0.9: 003, 004, 029, 035, 039, 051), outside
+theta; the change came from an exact-engine unit test), both runs alike): identified 7,
+within 6 (0.100; target 0.9: 003, 004, 029, 035, 039, 051), outside
 1 (032: theta 0.63 for 0.00 deg, standard error 0.07; Kelvin-Voigt walls of unequal
 stiffness; the same without the LO's friction, diagnosed after the run), bad 0, failed 0.
 The LO's friction beside the law: identified 29, within 28, outside 1 (056: 0.240 +/- 0.003

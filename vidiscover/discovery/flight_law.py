@@ -206,21 +206,6 @@ _MAX_MISFIT = 0.01          # largest RMS residual / RMS ball velocity jump
 #: tolerance on dev/test/holdout6 misfit 0.6-1.4 %.
 _MAX_MISFIT_EXCUSED = 0.02
 _CONSTRAINED = True         # candidate laws with mu < 0 are not considered
-#: The LO's own velocity jumps (:attr:`LoReaction.areas`) as the jumps, where its model
-#: holds. Off: on the spent corpus splits their per-wall errors are 0.0-0.6 % against the
-#: fitted areas' 0.3-2.8 % (dev-000/005/007/019), and they identified 6 laws of holdout15's
-#: 60 (all within) against 4, but on the independent simulator they are 1.6-2.7 % off per
-#: wall (P03-P06, the fitted areas 0.3-1.6 %) and its pooled law, right with the fitted
-#: areas, was refused. The cause is aliasing: a sum of samples is the pulse's integral only
-#: where the sampled spectrum vanishes at the sample rate, and a 100 us contact behind a
-#: 4th-order Butterworth at 0.39 fs keeps ~1.6 % there; at 8 Hz sampled at 6400 Hz (the
-#: paper's rig) every impact of a wall sits at the same sub-sample phase, so the error is a
-#: scale per wall (the mean of the LO's residual summed from 1 to 20 ms after P05's impacts
-#: is flat at -2.4 %: no window effect). The fitted areas model the sampled pulse at its
-#: phase. Sums over an aliasing-free (model) pulse are the way to use them.
-_LO_AREAS = False
-_LO_FLOOR = 0.0             # with them: their precision as a floor of the residual scale
-_LO_MISFIT = 1.25           # with them: misfit allowed over their expected (random) one
 _SCALE_TEST = False         # True: refuse laws that move with a free pulse-area scale per wall
 #: Spread (sd, relative) of the pulse areas' gain per recording and wall that the rows
 #: take out by default (:meth:`_Tents.basis`, ``jump_gain_sd``): 0, none (the areas taken
@@ -608,9 +593,8 @@ class _Tents:
 
     def __init__(self, records, library: tuple[str, ...], steps: int = STEPS,
                  gain_sd: float | None = None, gain_per: str = "wall",
-                 depth_free: bool = False, precision: float | None = None) -> None:
+                 depth_free: bool = False) -> None:
         self.records = records
-        self._precision = precision               # the jumps' own, when known (LO areas)
         self.depth_free = bool(depth_free)      # one free penetration time per recording
         self.steps = int(steps)
         self.library = library
@@ -805,12 +789,8 @@ class _Tents:
         """Relative precision of the jumps: RMS (area - dv) over RMS dv at the tents.
 
         ``area`` integrates the data over the pulse window, ``dv`` is the fitted
-        model's area: their difference is what the pulse model misses there. Given to
-        the constructor instead when the jumps carry their own standard errors (the
-        LO's velocity jumps, :attr:`LoReaction.areas`): their RMS over the RMS jump.
+        model's area: their difference is what the pulse model misses there.
         """
-        if self._precision is not None:
-            return float(self._precision)
         e = np.array([self.records[r].area[self.records[r].i_e[a]]
                       - self.records[r].dv[self.records[r].i_e[a]] for r, a, _ in self.rows])
         d = np.array([self.records[r].dv[self.records[r].i_e[a]] for r, a, _ in self.rows])
@@ -1168,13 +1148,23 @@ def _confounded(tents, points, jc, jf, floor: float, window: float) -> bool:
     """
     best = min(points, key=lambda p: p[2])
     Theta, Y, _, _ = tents.assemble(max(best[0], 0.0), best[1])
-    a, b = Theta[:, jc], Theta[:, jf]
-    cos = float(abs(a @ b) / max(np.linalg.norm(a) * np.linalg.norm(b), 1e-300))
     mu_se = _standard_errors(Theta[:, [jc, jf]], Y, floor)[0]
-    rivals = any(tents.n * math.log(p[2] / best[2]) <= window
-                 and (abs(p[0] - best[0]) > _AMBIGUOUS[0] or abs(p[1] - best[1]) > _AMBIGUOUS[1])
-                 for p in points)
-    return cos > _COLLINEAR or mu_se > MAX_MU_SE or rivals
+    return (_cosine(Theta[:, jc], Theta[:, jf]) > _COLLINEAR or mu_se > MAX_MU_SE
+            or bool(_rivals(points, best, tents.n, window)))
+
+
+def _cosine(a: np.ndarray, b: np.ndarray) -> float:
+    """|cos| of the angle between two columns (1: collinear)."""
+    return float(abs(a @ b) / max(np.linalg.norm(a) * np.linalg.norm(b), 1e-300))
+
+
+def _rivals(points, best, n: int, window: float) -> list:
+    """Fixed points that close the ``n`` tents about as well as ``best``, elsewhere.
+
+    Within ``window`` of its AICc, beyond :data:`_AMBIGUOUS` from it in mu or theta.
+    """
+    return [p for p in points if n * math.log(p[2] / best[2]) <= window
+            and (abs(p[0] - best[0]) > _AMBIGUOUS[0] or abs(p[1] - best[1]) > _AMBIGUOUS[1])]
 
 
 def _negative_friction(mu_free: float, mu_se: float) -> bool:
@@ -1329,30 +1319,17 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
         raise InputError(f"penetration must be 'free' or 'learned', was {penetration!r}")
     depth_free = penetration == "free"
     entries = [a if isinstance(a, FlightData) else FlightData.of(a) for a in analyses]
-    per = None
     if isinstance(lo_friction, LoReaction):
         lo = lo_friction
     elif not any(isinstance(a, FlightData) for a in analyses):
-        per = [lo_reaction_of(a) for a in analyses]
-        lo = pooled_lo_reaction(per)
+        lo = pooled_lo_reaction([lo_reaction_of(a) for a in analyses])
     else:
         lo = None
-    # the LO's own velocity jumps (no pulse shape assumed) replace the pulse areas where
-    # its model holds; the fitted areas stay as the cross-check
-    jump_noise = None
-    if (_LO_AREAS and lo_friction is not False and per is not None and lo.identified
-            and all(r.areas is not None and r.areas.size == e.dv.size
-                    for r, e in zip(per, entries, strict=True))):
-        entries = [e.with_impacts(dv=np.where(np.isfinite(r.areas), r.areas, e.dv), area=e.dv)
-                   for r, e in zip(per, entries, strict=True)]
-        se = np.concatenate([r.area_se[np.isfinite(r.areas)] for r in per])
-        ar = np.concatenate([r.areas[np.isfinite(r.areas)] for r in per])
-        jump_noise = float(np.sqrt(np.mean(se ** 2)) / max(np.sqrt(np.mean(ar ** 2)), 1e-300))
     # compliant contacts: the tents between the equivalent instantaneous impacts
     records = ([rec.equivalent_impacts() for rec in entries] if _compliant(entries)
                else entries)
     tents = _Tents(records, library, gain_sd=gain_sd, gain_per=jump_gain_per,
-                   depth_free=depth_free, precision=jump_noise)
+                   depth_free=depth_free)
     if tents.n < len(library) + 5:
         taken = (f"; {tents.n_rows - tents.n} go to the free gains and penetration depths"
                  if tents.transformed else "")
@@ -1370,7 +1347,7 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
     nt = tents.n                                  # the tents' rows (the prior's follow)
     jrms = float(np.sqrt(np.mean(tents.jumps() ** 2)))
     precision = tents.precision()
-    floor = precision * jrms * (_LO_FLOOR if jump_noise is not None else 1.0)
+    floor = precision * jrms
     # 1. the reconstruction-compatible law (constant + friction) to a fixed point,
     #    from several starts; the best self-consistent fit wins, rivals are reported
     points = [_fixed_point(tents, jc, jf, st, max_iter) for st in _STARTS]
@@ -1385,8 +1362,7 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
     n = tents.n
     best = min(points, key=lambda p: p[2])
     mu, theta = best[0], best[1]
-    rivals = [p for p in points if n * math.log(p[2] / best[2]) <= window
-              and (abs(p[0] - mu) > _AMBIGUOUS[0] or abs(p[1] - theta) > _AMBIGUOUS[1])]
+    rivals = _rivals(points, best, n, window)
     # 2. sparse regression over the library at that z'; reconstruct again if the
     #    selected law changes mu or theta
     prev = None
@@ -1432,8 +1408,7 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
         mu_ci = tuple(float(v) for v in percentile_interval(mus, level))
         theta_ci = tuple(float(v) for v in percentile_interval(ths, level))
         incl = inclusion(boots, library)
-    a, b = Theta[:nt, jc], Theta[:nt, jf]
-    cos = float(abs(a @ b) / max(np.linalg.norm(a) * np.linalg.norm(b), 1e-300))
+    cos = _cosine(Theta[:nt, jc], Theta[:nt, jf])
     misfit = float(np.sqrt(np.mean(resid[:nt] ** 2)) / jrms)
     mu_se, theta_se = _standard_errors(Theta[:, [jc, jf]], Y, floor)
     if _SUPPORT_SE:
@@ -1454,10 +1429,7 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
     if jk is not None:
         diagnostic["jackknife"] = jk
     reasons = []
-    # the LO's jumps carry random noise of known size: a right law leaves about that
-    # misfit (chi-square spread of a few hundred rows: _LO_MISFIT above it refuses)
-    allowed = precision * (_LO_MISFIT if jump_noise is not None else 1.0)
-    if misfit > max(_MAX_MISFIT, min(allowed, _MAX_MISFIT_EXCUSED)):
+    if misfit > max(_MAX_MISFIT, min(precision, _MAX_MISFIT_EXCUSED)):
         reasons.append(f"the weak form does not hold: the fit misses the tents by "
                        f"{misfit:.1%} of the ball velocity jumps (their precision here: "
                        f"{precision:.1%}; unseen re-impacts in wall chatter, the ball riding "
@@ -1478,7 +1450,7 @@ def discover_flight_law(analyses: Sequence, *, seed: int = 0, n_boot: int = 200,
                        f"{mu_se:.2g} and {theta_se:.2g} deg): the recordings carry a model-form "
                        "error of their own (e.g. walls of unequal stiffness) that the fit's "
                        "precision does not cover")
-    lifted = prior is not None and jk is not None and jk.get("G", 0) >= 3
+    lifted = prior is not None and jk is not None     # (the prior implies 3 groups)
     if cos > _COLLINEAR and not lifted:
         reasons.append(f"friction and inclination are confounded in these flights (cosine "
                        f"{cos:.4f} between their columns); pool recordings at several "
