@@ -706,3 +706,43 @@ def test_to_jsonable_returns_plain_python_types():
     assert [type(out[k]) for k in ("f", "i", "b")] == [float, int, bool]
     with pytest.raises(TypeError, match="not JSON serialisable: object"):
         to_jsonable(object())
+
+
+# ----------------------------------------------------------------- gzipped CSV (read only)
+def test_gzipped_csv_reads_like_the_csv(tmp_path, rec_csv, simulated):
+    """``rec.csv.gz`` (how the independent simulator's recordings ship) reads as the CSV
+    it holds, with the sidecars of the stem ``rec``: ``rec.json`` and ``rec.truth.json``."""
+    import gzip
+    import shutil
+
+    gz = tmp_path / "gz" / "rec.csv.gz"
+    gz.parent.mkdir()
+    gz.write_bytes(gzip.compress(rec_csv.read_bytes()))
+    shutil.copy(rec_csv.with_suffix(".json"), gz.parent / "rec.json")
+    plain, packed = read_recording(rec_csv), read_recording(gz)
+    assert packed.name == "rec"
+    for f in ("t", "x", "a", "xe"):
+        np.testing.assert_array_equal(getattr(packed, f), getattr(plain, f))
+    assert vio._truth_path(gz).name == "rec.truth.json"
+
+
+def test_gzipped_csv_errors_name_the_file(tmp_path, rec_csv):
+    import gzip
+    import shutil
+
+    shutil.copy(rec_csv.with_suffix(".json"), tmp_path / "bad.json")
+    (tmp_path / "bad.csv.gz").write_bytes(b"not gzip at all")
+    with pytest.raises(InputError, match=r"bad\.csv\.gz: not a readable gzip file, truncated "
+                                         r"or corrupted \(.*\); copy/export it again"):
+        read_recording(tmp_path / "bad.csv.gz")
+    # a row problem inside the archive is diagnosed from the decompressed text
+    text = rec_csv.read_text().splitlines()
+    text[5] = text[5].replace(",", ",oops", 1)
+    shutil.copy(rec_csv.with_suffix(".json"), tmp_path / "row.json")
+    (tmp_path / "row.csv.gz").write_bytes(gzip.compress("\n".join(text).encode() + b"\n"))
+    with pytest.raises(InputError, match=r"row\.csv\.gz: .*line 6"):
+        read_recording(tmp_path / "row.csv.gz")
+    (tmp_path / "rec.txt.gz").write_bytes(gzip.compress(b"t,x,a,xe\n"))
+    with pytest.raises(InputError, match=r"rec\.txt\.gz: unknown recording format "
+                                         r"'\.txt\.gz'; use one of .*, \.csv\.gz"):
+        read_recording(tmp_path / "rec.txt.gz")

@@ -102,6 +102,18 @@ class RawTable:
         return InputError(f"{self.path}: {problem}; {fix}")
 
 
+def stem_of(path: Path) -> str:
+    """A recording's name: its file name without the format suffix and a ``.gz``.
+
+    Examples
+    --------
+    >>> stem_of(Path("runs/P02.csv.gz")), stem_of(Path("rec.csv"))
+    ('P02', 'rec')
+    """
+    name = path.name[:-3] if path.name.lower().endswith(".gz") else path.name
+    return Path(name).stem
+
+
 def cells_to_float(raw: RawTable, name: str, cells: list) -> np.ndarray:
     """Parse text cells; missing tokens become NaN, anything else non-numeric is an error."""
     out = np.empty(len(cells))
@@ -374,4 +386,4 @@ def build_recording(raw: RawTable, cols: dict[str, str], values: dict[str, np.nd
     check_units(raw, cols, sig, meta, fs)
     units = "mV" if any(c.endswith("_mV") for c in cols.values()) else "SI"
     meta = replace(meta, sample_rate=fs, extra={**meta.extra, "units": units})
-    return Recording(t, sig["x"], sig["a"], sig["xe"], meta, name=path.stem)
+    return Recording(t, sig["x"], sig["a"], sig["xe"], meta, name=stem_of(path))

@@ -50,12 +50,27 @@ _META_KEYS = ("b", "sample_rate", "m1", "m2", "c1", "k1", "excitation", "sensiti
 
 
 # =============================================================================== reading
-def _format_of(path: Path) -> str:
+def _format_of(path: Path, compressed: bool = False) -> str:
+    """The format of ``path`` by its suffix; ``compressed`` admits a gzipped CSV."""
     fmt = path.suffix.lower()
+    if compressed and fmt == ".gz" and Path(path.stem).suffix.lower() == ".csv":
+        return ".csv.gz"
     if fmt not in FORMATS:
-        raise InputError(f"{path}: unknown recording format '{path.suffix}'; use one of "
-                         f"{', '.join(FORMATS)}")
+        shown = "".join(path.suffixes[-2:]) if fmt == ".gz" else path.suffix
+        also = ", .csv.gz" if compressed else ""
+        raise InputError(f"{path}: unknown recording format '{shown}'; use one of "
+                         f"{', '.join(FORMATS)}{also}")
     return fmt
+
+
+def _gunzip(path: Path, data: bytes) -> bytes:
+    import gzip
+    import zlib
+
+    try:
+        return gzip.decompress(data)
+    except (OSError, EOFError, zlib.error) as err:
+        raise _corrupt(path, "gzip", err) from None
 
 
 def _read_bytes(path: Path, what: str, fix: str) -> bytes:
@@ -133,7 +148,8 @@ def _first_line(data: bytes) -> bytes:
     return b""
 
 
-def _read_csv(path: Path, data: bytes) -> checks.RawTable:
+def _read_csv(path: Path, data: bytes, reread: Callable[[], bytes] | None = None
+              ) -> checks.RawTable:
     # The text is decoded as a whole only where a row must be diagnosed: a 200 MB file is
     # parsed by pyarrow from the bytes (a decoded copy and a StringIO of it cost ~5x the
     # file). ASCII is UTF-8, so only other files are checked by decoding them.
@@ -145,7 +161,9 @@ def _read_csv(path: Path, data: bytes) -> checks.RawTable:
     del data
 
     def text() -> str:
-        return _decode(path, held[0] if held[0] is not None
+        if held[0] is not None:
+            return _decode(path, held[0])
+        return _decode(path, reread() if reread is not None
                        else _read_bytes(path, "recording file", "check the path"))
     delim = next((d for d in (",", ";", "\t") if d in first), ",")
 
@@ -355,12 +373,21 @@ def read_recording(path: str | os.PathLike, meta: Any = None,
     if path.is_dir():               # before the suffix check: 'unknown format' would mislead
         raise InputError(f"{path}: is a directory, not a recording file; pass the recording "
                          "file (rec.csv, .parquet or .npz)")
-    fmt = _format_of(path)
+    fmt = _format_of(path, compressed=True)
     data = _read_bytes(path, "recording file", "check the path")
+    if fmt == ".csv.gz":
+        data = _gunzip(path, data)
     if _blank(data):
         raise InputError(f"{path}: empty file; copy/export the recording again")
     metadata = read_metadata(meta, recording=path)
-    if fmt in LAB_FORMATS:
+    if fmt == ".csv.gz":
+        raw = _read_csv(path, data, reread=lambda: _gunzip(
+            path, _read_bytes(path, "recording file", "check the path")))
+        if channels is not None:
+            from .io_lab import map_columns
+
+            raw = map_columns(raw, channels)
+    elif fmt in LAB_FORMATS:
         from .io_lab import read_lab
 
         raw = read_lab(path, data, channels)
@@ -458,7 +485,7 @@ def read_metadata(meta: Any = None, recording: str | os.PathLike | None = None) 
     if meta is None:
         if rec is None:
             raise InputError("no metadata given; pass a JSON file, a dict or a Metadata")
-        path = rec.with_suffix(".json")
+        path = rec.with_name(f"{checks.stem_of(rec)}.json")
         if not path.exists():
             raise InputError(f"{rec}: missing metadata: {path} not found; create "
                              f'{path.name} with {{"b": 0.009}} (half-clearance in m) or '
@@ -475,7 +502,7 @@ def read_metadata(meta: Any = None, recording: str | os.PathLike | None = None) 
 def _truth_path(path: Path) -> Path:
     if path.name.endswith(".truth.json"):
         return path
-    return path.with_name(f"{path.stem}.truth.json")
+    return path.with_name(f"{checks.stem_of(path)}.truth.json")
 
 
 def read_truth(path: str | os.PathLike) -> GroundTruth:

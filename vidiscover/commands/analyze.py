@@ -50,10 +50,12 @@ def _check_mu(mu: float) -> float:
 
 
 def _unique_stems(paths: list[Path]) -> list[str]:
+    from .._io_checks import stem_of
+
     seen: dict[str, int] = {}
     out = []
     for p in paths:
-        stem = p.stem
+        stem = stem_of(p)
         k = seen.get(stem, 0) + 1
         seen[stem] = k
         out.append(stem if k == 1 else f"{stem}-{k}")
@@ -67,10 +69,11 @@ def load_inputs(paths, meta: Path | None, channels: dict | None = None) -> list:
 
 def _load(path: Path, meta: Path | None, channels: dict | None = None):
     """(Recording, truth or None) of one file; every problem is an InputError."""
+    from .._io_checks import stem_of
     from ..io import read_recording, read_truth
 
     rec = read_recording(path, meta=meta, channels=channels)
-    truth_file = path.with_name(f"{path.stem}.truth.json")
+    truth_file = path.with_name(f"{stem_of(path)}.truth.json")
     truth = read_truth(truth_file) if truth_file.is_file() else None
     return rec, truth
 
