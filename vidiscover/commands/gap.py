@@ -45,6 +45,8 @@ def human_gap(doc: dict) -> str:
         params = param_text(e["params"], e.get("ci"))
         lines.append(f"    {e['name']:<32} {e['gap_after']:>10.1f}  "
                      f"{100 * e['shrink']:>7.1f} %  ({params})")
+    for name, why in (doc.get("not_fitted") or {}).items():
+        lines.append(f"    {name:<32} not fitted: {why}")
     if doc["attributed"]:
         lines.append("  attributed: " + ", ".join(
             f"{a['name']} ({100 * a['share']:.0f} % of the gap; "
@@ -122,6 +124,8 @@ def _html(doc: dict, figures: list[str]) -> str:
     if doc.get("not_excluded"):
         body.append(f"<p>Not excluded by this recording: {esc(', '.join(doc['not_excluded']))} "
                     f"({esc(_NOT_EXCLUDED_WHY)}).</p>")
+    for name, why in (doc.get("not_fitted") or {}).items():
+        body.append(f"<p>Not fitted: {esc(name)} ({esc(why)}).</p>")
     if doc["attributed"]:
         body.append("<h2>Attributed</h2>")
         body.append(_table(["effect", "share of the gap", "parameters [95 % interval]"],

@@ -112,6 +112,8 @@ class GapReport:
     cis : dict
         Selected effect -> parameter -> approximate 95 % interval
         (:func:`~vidiscover.gap.fit.profile_ci`).
+    not_fitted : dict
+        Offered effects this recording gives no fit of -> why (:data:`NOT_FITTED`).
     """
 
     name: str
@@ -122,6 +124,7 @@ class GapReport:
     significant: bool
     n_sims: int = 0
     cis: dict = field(default_factory=dict)
+    not_fitted: dict = field(default_factory=dict)
 
     @property
     def gap_before(self) -> float:
@@ -243,6 +246,7 @@ class GapReport:
             "unexplained": self.unexplained,
             "verdict": self.verdict,
             "not_excluded": self.not_excluded,
+            "not_fitted": dict(self.not_fitted),
             "selected": [c.name for c in self.selected],
             "components": comps,
             "statistics": stats,
@@ -587,6 +591,17 @@ def _pair_items(nominal, fits, max_params=None) -> list[tuple]:
             continue
         seen.add(key)
         items.append((a, b.name))
+    # constants per wall paired with a 1-D effect are fitted jointly (the walls
+    # re-fitted at every trial of the effect); they are also fitted the other way,
+    # the effect's own fit first, the walls on top, then the effect again. The two
+    # routes reach different attractors: seed-0 battery #74 (unequal walls and mu 0.15
+    # in a multi_ipc orbit at 9 mm) leaves 78 jointly and 3.2 this way. (Until the law
+    # per wall stopped being fitted where no wall shows a slope, its zero-slope fit on
+    # top of the effect took this route, as constants per wall.)
+    by_name = {f.name: f for f in fits}
+    for a, b in list(items):
+        if a.name in NESTED.values() and b in PROFILES_WALLS and b in by_name:
+            items.append((by_name[b], a.name))
     return items
 
 
@@ -1150,6 +1165,16 @@ def _laser_tie(model: Model, fits: list[CandidateFit]) -> list[CandidateFit]:
     return fits if win is best else [win] + [f for f in fits if f is not win]
 
 
+#: Why an offered effect has no fit on a recording (:attr:`GapReport.not_fitted`).
+NOT_FITTED = {
+    "velocity_dependent_restitution":
+        "no wall's r moves with its impact speed beyond the precision of r: the law "
+        "would be constants per wall (asymmetric_restitution)",
+}
+#: ... for the other effects: what they need is not in the recording.
+NOT_FITTED_OTHER = "the recording has nothing this effect acts on (no impacts on a wall)"
+
+
 def _diagnose_with(rec, seed, names, an, run) -> GapReport:
     model, nominal, n_sims = nominal_model(rec, an, seed=seed, run=run)
     if nominal.gap.total < SIGNIFICANT_DROP:
@@ -1161,6 +1186,8 @@ def _diagnose_with(rec, seed, names, an, run) -> GapReport:
     fits = [f for f in run(_fit_item, [(model, n, fx0, None) for n in names],
                            cost=lambda it: FIT_COST.get(it[1], 1))
             if f is not None]
+    fitted = {f.name for f in fits}
+    not_fitted = {n: NOT_FITTED.get(n, NOT_FITTED_OTHER) for n in names if n not in fitted}
     n_sims += sum(f.n_sims for f in fits)
     fits = _parsimonious(sorted(fits, key=lambda c: c.score))
     significant = _significant(nominal, fits)
@@ -1188,4 +1215,5 @@ def _diagnose_with(rec, seed, names, an, run) -> GapReport:
         cis[c.name] = profile_ci(ci_model, c, run=run)
         n_sims += 1 + 2 * len(c.params)
     return GapReport(name=rec.name, model=model, nominal=nominal, candidates=fits,
-                     selected=selected, significant=significant, n_sims=n_sims, cis=cis)
+                     selected=selected, significant=significant, n_sims=n_sims, cis=cis,
+                     not_fitted=not_fitted)
