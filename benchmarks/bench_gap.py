@@ -231,6 +231,19 @@ whose false asym + clearance pair is no longer kept (the sharp pick, asym + exci
 scores worse than asym alone on the model's scales): coverage there 0/2 -> 2/2.
 Simulations: the same, but 290 -> 287 on #41.
 
+Then (b2fc526, 2026-11-28) a law per wall is fitted only where some wall's r moves with
+its speed beyond 3 standard errors and 0.004 (``fit.SLOPE_Z``, ``fit.MIN_LAW_EFFECT``;
+else ``not_fitted``), its r0 shift is kept only where it lowers the fit-draw gap, and
+constants per wall with a 1-D effect are also fitted the other way round. Spent draws:
+35103 #1 (a law, named unequal walls) and 35107 #12 (unequal walls, named a law) now
+right; the 60 restitution cases of 15 other spent draws keep their verdicts (58/60).
+Seed-0 battery unchanged: top-1 54/57, none 11/11, out-of-catalogue 6/6, pairs 5/6,
+coverage 0.977 (384 s wall on 2 cores). Fresh draws 37101, 37103, 37107 (``--drawn
+24``, each run once on that code): top-1 16/16, 16/16, 15/16 = 0.979 (the miss: a
+speed law with each wall hit at one speed, named unequal walls, law "not excluded"),
+none 4/4, 4/4, 3/4 (a no-effect multi_ipc record at 7.0 mm, gap 19.1, named a tilt),
+pairs 3/4, 4/4, 4/4 (a no_impact record: friction alone), coverage 0.846, 0.906, 0.906.
+
 Usage::
 
     python benchmarks/bench_gap.py [--quick | --ci | --drawn N] [--n-jobs 2] [--seed 0]
