@@ -564,19 +564,24 @@ def test_a_tilt_tied_with_a_clearance_error_is_named_by_the_laser_statistics():
     assert rep.selected[0].params["theta"] == pytest.approx(3.53, abs=0.3)
 
 
+def _drawn_fit(seed: int, index: int, name: str):
+    """(nominal model, fit of candidate ``name``) of drawn case ``index`` of ``seed``."""
+    from vidiscover.gap.battery import case_recording, drawn_cases
+    from vidiscover.gap.diagnose import nominal_model
+    from vidiscover.gap.fit import fit_candidate
+
+    rec, _ = case_recording(drawn_cases(seed, 24)[index])
+    model, _, _ = nominal_model(rec)
+    return model, fit_candidate(model, name)
+
+
 @pytest.mark.slow
 def test_a_speed_law_at_one_speed_per_wall_gets_its_slopes_searched():
     # drawn case 7919 #1: a law per wall in a 2ipc_asym orbit, each wall hit at one
     # speed (spread 2e-4). The regression sees no slope; zero slopes at the recording's
     # r per wall land on another attractor (left 296) while the slope, which decides
     # which orbit is stable, is searched and reaches the recording's (before: 296)
-    from vidiscover.gap.battery import case_recording, drawn_cases
-    from vidiscover.gap.diagnose import nominal_model
-    from vidiscover.gap.fit import fit_candidate
-
-    rec, _ = case_recording(drawn_cases(7919, 24)[1])
-    model, nominal, _ = nominal_model(rec)
-    fit = fit_candidate(model, "velocity_dependent_restitution")
+    _, fit = _drawn_fit(7919, 1, "velocity_dependent_restitution")
     slopes = [float(fit.params[s].split(":")[2]) for s in ("right", "left")]
     assert all(a > 0 for a in slopes)                 # 0.16, 0.51 (truth 0.344, 0.522)
     assert fit.gap.total < 1.0                        # 0.16 (asym: 291)
@@ -700,13 +705,9 @@ def test_a_speed_law_keeps_its_regressed_laws_when_the_level_shift_lands_elsewhe
     # 0.860 - 0.584 v); two shifts of r0 by the simulated orbit's mean r moved the left
     # r0 to 0.935 and the law left 333, above the constants' 182 (verdict: unequal
     # walls). The shifted laws are simulated too and the best is kept: gap 0.2
-    from vidiscover.gap.battery import case_recording, drawn_cases
-    from vidiscover.gap.diagnose import nominal_model
     from vidiscover.gap.fit import fit_candidate
 
-    rec, _ = case_recording(drawn_cases(35103, 24)[1])
-    model, _, _ = nominal_model(rec)
-    fit = fit_candidate(model, "velocity_dependent_restitution")
+    model, fit = _drawn_fit(35103, 1, "velocity_dependent_restitution")
     left = [float(x) for x in fit.params["left"].split(":")[1:]]
     assert left == pytest.approx([0.860, 0.584], abs=0.02)
     assert fit.gap.total < 2.0                           # 0.21 (333 before)
