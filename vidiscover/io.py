@@ -380,19 +380,14 @@ def read_recording(path: str | os.PathLike, meta: Any = None,
     if _blank(data):
         raise InputError(f"{path}: empty file; copy/export the recording again")
     metadata = read_metadata(meta, recording=path)
-    if fmt == ".csv.gz":
-        raw = _read_csv(path, data, reread=lambda: _gunzip(
-            path, _read_bytes(path, "recording file", "check the path")))
-        if channels is not None:
-            from .io_lab import map_columns
-
-            raw = map_columns(raw, channels)
-    elif fmt in LAB_FORMATS:
+    if fmt in LAB_FORMATS:
         from .io_lab import read_lab
 
         raw = read_lab(path, data, channels)
     else:
-        raw = _READERS[fmt](path, data)
+        raw = (_read_csv(path, data, reread=lambda: _gunzip(
+                   path, _read_bytes(path, "recording file", "check the path")))
+               if fmt == ".csv.gz" else _READERS[fmt](path, data))
         if channels is not None:
             from .io_lab import map_columns
 

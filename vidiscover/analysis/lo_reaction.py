@@ -60,8 +60,9 @@ from .signals import savgol_taps
 __all__ = ["LoReaction", "lo_reaction", "lo_reaction_of", "pooled_lo_reaction",
            "MAX_STIFFNESS_ERROR", "MAX_SE"]
 
+
 def _savgol(y: np.ndarray, win: int, polyorder: int, deriv: int = 0,
-                  delta: float = 1.0) -> np.ndarray:
+            delta: float = 1.0) -> np.ndarray:
     """``scipy.signal.savgol_filter(y, win, polyorder, deriv, delta)`` (mode "interp").
 
     The same taps (:func:`~vidiscover.analysis.signals.savgol_taps`, bit for bit) through

@@ -690,30 +690,30 @@ def _fit_velocity(model: Model, base: Effects):
     # gap 19, and two shifts of r0, +0.075 on the left wall, left 333, above the
     # constants' 182). So the shifted laws are simulated too and the laws of the lowest
     # gap on the fit draw are kept, as the slope search keeps its best.
+    # (Not refined: one simulation, its shift taken unsimulated, as before.)
+    def shifted(sig) -> dict:
+        out = dict(laws)
+        for side in ("right", "left"):
+            s, t = sig.values.get(f"{side}.r_level"), real.values.get(f"{side}.r_level")
+            if s is not None and t is not None and np.isfinite(s) and np.isfinite(t):
+                out[side] = (laws[side][0] + t - s, laws[side][1])
+        return out
+
     tried: list[tuple[float, dict]] = []
-    rounds = 3 if model.refine else 1
-    for k in range(rounds):
+    sig = None
+    for k in range(3 if model.refine else 1):
+        if k:
+            laws = shifted(sig)
         p = {s: _law_spec(*laws[s]) for s in laws}
         fx = base.with_effect("velocity_dependent_restitution", **p)
         sig = simulate_signature(model, fx)
         n += 1
-        if not model.refine:
-            break
-        tried.append((gap_of(model, sig, fx).total, p))
-        if k == rounds - 1:
-            break
-        for side in ("right", "left"):
-            s, t = sig.values.get(f"{side}.r_level"), real.values.get(f"{side}.r_level")
-            if s is not None and t is not None and np.isfinite(s) and np.isfinite(t):
-                laws[side] = (laws[side][0] + t - s, laws[side][1])
+        if model.refine:
+            tried.append((gap_of(model, sig, fx).total, p))
     if not model.refine:
-        for side in ("right", "left"):
-            s, t = sig.values.get(f"{side}.r_level"), real.values.get(f"{side}.r_level")
-            if s is not None and t is not None and np.isfinite(s) and np.isfinite(t):
-                laws[side] = (laws[side][0] + t - s, laws[side][1])
+        laws = shifted(sig)
         return {s: _law_spec(*laws[s]) for s in laws}, 4, model.params.r, n
-    p = min(tried, key=lambda gp: gp[0])[1]
-    return p, 4, model.params.r, n
+    return min(tried, key=lambda gp: gp[0])[1], 4, model.params.r, n
 
 
 def _fit_1d(model: Model, base: Effects, name: str, key: str, lo: float, hi: float,
