@@ -74,3 +74,21 @@ def test_a_law_not_excluded_by_the_recording_is_said_in_text_and_html():
     doc["not_excluded"] = []
     assert "not excluded" not in human_gap(doc).lower()
     assert "not excluded" not in _html(doc, []).lower()
+
+
+def test_an_offered_effect_without_a_fit_is_said_with_its_reason():
+    from vidiscover.commands.gap import human_gap
+    from vidiscover.gap.diagnose import NOT_FITTED
+
+    why = NOT_FITTED["velocity_dependent_restitution"]
+    doc = {"recording": "r", "gap_before": 40.0, "gap_after": 0.8, "threshold": 8.0,
+           "significant": True, "verdict": "asymmetric_restitution", "unexplained": 0.02,
+           "not_fitted": {"velocity_dependent_restitution": why},
+           "attributed": [], "components": {"flights": {"before": 40.0, "after": 0.8}},
+           "effects": []}
+    for text in (human_gap(doc), _html(doc, [])):
+        assert "not fitted" in text.lower()
+        assert "velocity_dependent_restitution" in text and "beyond the precision" in text
+    doc["not_fitted"] = {}
+    assert "not fitted" not in human_gap(doc).lower()
+    assert "not fitted" not in _html(doc, []).lower()
