@@ -154,20 +154,9 @@ def test_a_law_the_flights_determine_is_not_moved_by_the_lo_friction():
     assert res.to_dict()["lo_friction_used"] is False
 
 
-@pytest.mark.parametrize("win,deriv,delta", [(41, 0, 1.0), (41, 1, 1 / 6400), (5, 1, 1e-3)])
-def test_smoothing_is_scipys_savgol_filter_bit_for_bit(win, deriv, delta):
-    from scipy.signal import savgol_filter
-
-    from vidiscover.analysis.lo_reaction import _savgol
-
-    y = np.cumsum(np.random.default_rng(win).normal(size=3000))
-    assert np.array_equal(_savgol(y, win, 2, deriv, delta),
-                          savgol_filter(y, win, 2, deriv=deriv, delta=delta))
-
-
 def test_discover_does_not_import_scipy_signal():
     # importing scipy.signal costs ~0.5 s per process; the LO's friction, which every
-    # discover runs, imported it until its smoothing was written out (_savgol)
+    # discover runs, imported it until it used the reconstruction's quadratic smoother
     import subprocess
     import sys
 

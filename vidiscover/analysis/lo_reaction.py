@@ -55,34 +55,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..params import G_ACCEL
-from .signals import savgol_taps
+from .signals import quadratic_smoother
 
 __all__ = ["LoReaction", "lo_reaction", "lo_reaction_of", "pooled_lo_reaction",
            "MAX_STIFFNESS_ERROR", "MAX_SE"]
-
-
-def _savgol(y: np.ndarray, win: int, polyorder: int, deriv: int = 0,
-            delta: float = 1.0) -> np.ndarray:
-    """``scipy.signal.savgol_filter(y, win, polyorder, deriv, delta)`` (mode "interp").
-
-    The same taps (:func:`~vidiscover.analysis.signals.savgol_taps`, bit for bit) through
-    the same ``scipy.ndimage.convolve1d``, so the same interior values bit for bit (a test
-    checks it); the edges from the same polynomial fit of the first and last windows.
-    Written out because importing :mod:`scipy.signal` costs ~0.5 s per process, which
-    ``discover`` paid for this estimator alone (the analysis avoids it the same way).
-    """
-    from scipy.ndimage import convolve1d
-
-    y = np.asarray(y, dtype=float)
-    out = convolve1d(y, savgol_taps(win, polyorder, deriv, delta, use="conv"),
-                     mode="constant")
-    h, j = win // 2, np.arange(win, dtype=float)
-    for start, at in ((0, j[:h]), (y.size - win, j[win - h:])):
-        poly = np.polyfit(j, y[start:start + win], polyorder)
-        if deriv:
-            poly = np.polyder(poly, deriv)
-        out[start + at.astype(int)] = np.polyval(poly, at) / delta ** deriv
-    return out
 
 
 #: Largest relative difference between the fitted LO stiffness (k1/m1) and the
@@ -198,10 +174,9 @@ def lo_reaction(t: np.ndarray, x: np.ndarray, a: np.ndarray, xe: np.ndarray, *,
     if n < 4 * w:
         return LoReaction.refused("the record is too short to read friction from the LO")
     x, xe = (np.nan_to_num(np.asarray(v, float)) for v in (x, xe))
-    xs, es = _savgol(x, w, 2), _savgol(xe, w, 2)
-    vx = _savgol(x, w, 2, deriv=1, delta=1 / fs)
-    ve = _savgol(xe, w, 2, deriv=1, delta=1 / fs)
-    ac = _savgol(np.nan_to_num(np.asarray(a, float)), w, 2)
+    # one local quadratic (Savitzky-Golay) per channel: its value and derivative
+    (xs, vx), (es, ve) = (quadratic_smoother(v, w, 1 / fs) for v in (x, xe))
+    ac = quadratic_smoother(np.nan_to_num(np.asarray(a, float)), w, 1 / fs)[0]
     # a smoothed sample is clean only if its whole window was
     keep &= np.convolve(~keep, np.ones(w), "same") < 0.5
     # sgn(z') along each flight: ball on the straight line between its impact positions

@@ -79,7 +79,7 @@ from ..params import G_ACCEL
 from ._table import check_columns, to_frame
 from .friction import falling_frame, integrate_flights, solve_flights
 from .impacts import ImpactDetection
-from .signals import fill_gaps, robust_std, savgol_taps
+from .signals import fill_gaps, quadratic_smoother, robust_std
 
 if TYPE_CHECKING:      # pandas is imported where a table is built, not to analyse
     import pandas as pd
@@ -524,7 +524,7 @@ def _drift(tr, xl, x_raw, ok, fs, window):
     if mean.size < 5:
         c = np.polyfit(tb, mean, min(1, mean.size - 1)) if mean.size > 1 else np.r_[mean]
         return _PolyDrift(c)
-    Db, Ddb = _quadratic_smoother(mean, win, h)
+    Db, Ddb = quadratic_smoother(mean, win, h)
     return _SmoothDrift(tb, Db, Ddb)
 
 
@@ -560,7 +560,7 @@ def _centred(tr, ok, B, cut, tb, cb, good, mean, win, h):
             m = np.interp(tb, tg, m[gi])
             for sel, k in ((tb < tg[0], gi[0]), (tb > tg[-1], gi[-1])):
                 m[sel] = (mean[k] - slope[k] * off[k]) + slope[k] * (tb[sel] - tb[k])
-        Db, Ddb = _quadratic_smoother(m, win, h)
+        Db, Ddb = quadratic_smoother(m, win, h)
         slope = Ddb
     return _SmoothDrift(tb, Db, Ddb)
 
@@ -598,32 +598,6 @@ class _SmoothDrift:
         for sel, k in ((x < tb[0], 0), (x > tb[-1], -1)):
             D[sel] = Db[k] + Ddb[k] * (x[sel] - tb[k])
         return D, Dd
-
-
-@functools.lru_cache(maxsize=8)
-def _quadratic_taps(win: int, h: float):
-    c0 = savgol_taps(win, 2)
-    c1 = savgol_taps(win, 2, deriv=1, delta=h)
-    j = np.arange(win, dtype=float) - win // 2
-    P = np.linalg.pinv(np.vander(j, 3, increasing=True))   # coefficients of the quadratic
-    return c0, c1, P
-
-
-def _quadratic_smoother(y, win, h):
-    """Local quadratic fit value and derivative (edge windows fitted as a whole)."""
-    from scipy.ndimage import correlate1d
-
-    half = win // 2
-    c0, c1, P = _quadratic_taps(win, h)
-    val = correlate1d(y, c0, mode="nearest")
-    der = correlate1d(y, c1, mode="nearest")
-    j = np.arange(win, dtype=float) - half
-    for sl, jj in ((slice(0, half), j[:half]), (slice(y.size - half, y.size), j[-half:])):
-        seg = y[:win] if sl.start == 0 else y[-win:]
-        c = P @ seg
-        val[sl] = c[0] + c[1] * jj + c[2] * jj ** 2
-        der[sl] = (c[1] + 2 * c[2] * jj) / h
-    return val, der
 
 
 def refly(recon: Reconstruction, det: ImpactDetection, mu: float, *,

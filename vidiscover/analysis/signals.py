@@ -499,6 +499,36 @@ def savgol_taps(win: int, polyorder: int, deriv: int = 0, delta: float = 1.0,
 
 
 @functools.lru_cache(maxsize=8)
+def _quadratic_taps(win: int, h: float):
+    c0 = savgol_taps(win, 2)
+    c1 = savgol_taps(win, 2, deriv=1, delta=h)
+    j = np.arange(win, dtype=float) - win // 2
+    P = np.linalg.pinv(np.vander(j, 3, increasing=True))   # coefficients of the quadratic
+    return c0, c1, P
+
+
+def quadratic_smoother(y: np.ndarray, win: int, h: float) -> tuple[np.ndarray, np.ndarray]:
+    """Local quadratic fit's value and derivative (edge windows fitted as a whole).
+
+    ``savgol_filter(y, win, 2)`` and ``savgol_filter(y, win, 2, deriv=1, delta=h)`` of
+    mode "interp" (to rounding, ~1e-14 relative), without importing scipy.signal.
+    """
+    from scipy.ndimage import correlate1d
+
+    half = win // 2
+    c0, c1, P = _quadratic_taps(win, h)
+    val = correlate1d(y, c0, mode="nearest")
+    der = correlate1d(y, c1, mode="nearest")
+    j = np.arange(win, dtype=float) - half
+    for sl, jj in ((slice(0, half), j[:half]), (slice(y.size - half, y.size), j[-half:])):
+        seg = y[:win] if sl.start == 0 else y[-win:]
+        c = P @ seg
+        val[sl] = c[0] + c[1] * jj + c[2] * jj ** 2
+        der[sl] = (c[1] + 2 * c[2] * jj) / h
+    return val, der
+
+
+@functools.lru_cache(maxsize=8)
 def _savgol_parts(win: int):
     """Savitzky-Golay (cubic) taps and the edge projections of mode 'interp'."""
     h = win // 2
