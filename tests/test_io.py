@@ -723,7 +723,7 @@ def test_gzipped_csv_reads_like_the_csv(tmp_path, rec_csv, simulated):
     assert packed.name == "rec"
     for f in ("t", "x", "a", "xe"):
         np.testing.assert_array_equal(getattr(packed, f), getattr(plain, f))
-    assert vio._truth_path(gz).name == "rec.truth.json"
+    assert vio.truth_path(gz).name == "rec.truth.json"
 
 
 def test_gzipped_csv_errors_name_the_file(tmp_path, rec_csv):

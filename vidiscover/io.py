@@ -39,8 +39,8 @@ from .params import G_ACCEL
 from .recording import Metadata, Recording
 from .truth import GroundTruth
 
-__all__ = ["FORMATS", "read_recording", "read_metadata", "read_truth", "write_recording",
-           "write_json", "to_jsonable", "atomic_directory", "check_output_dir"]
+__all__ = ["FORMATS", "read_recording", "read_metadata", "read_truth", "truth_path",
+           "write_recording", "write_json", "to_jsonable", "atomic_directory", "check_output_dir"]
 
 #: Recording file formats, by suffix (the last three read only, by :mod:`.io_lab`).
 FORMATS = (".csv", ".parquet", ".npz", ".tdms", ".uff", ".unv")
@@ -494,7 +494,12 @@ def read_metadata(meta: Any = None, recording: str | os.PathLike | None = None) 
     return _metadata_from_dict(content, str(path))
 
 
-def _truth_path(path: Path) -> Path:
+def truth_path(path: str | os.PathLike) -> Path:
+    """The ground-truth file of recording ``path`` (``rec.csv[.gz]`` -> ``rec.truth.json``).
+
+    A truth file's own path is returned as it is.
+    """
+    path = Path(path)
     if path.name.endswith(".truth.json"):
         return path
     return path.with_name(f"{checks.stem_of(path)}.truth.json")
@@ -519,7 +524,7 @@ def read_truth(path: str | os.PathLike) -> GroundTruth:
         No truth file (only simulated recordings have one), malformed JSON or
         content that is not a ground truth.
     """
-    tp = _truth_path(Path(path))
+    tp = truth_path(Path(path))
     truth = _load_json(tp, "ground-truth file",
                        "only simulated recordings (vidiscover simulate) have one")
     try:
@@ -620,7 +625,7 @@ def write_recording(rec: Recording, path: str | os.PathLike,
     columns = _columns_for(rec, units)
     meta = rec.meta.to_dict()
     meta["units"] = units
-    truth_path = _truth_path(path)
+    tpath = truth_path(path)
     jobs: list[tuple[Path, Callable[[Path], None]]] = [
         (path, lambda tmp: _write_data(fmt, tmp, columns, units)),
         (path.with_suffix(".json"), lambda tmp: dump_json(tmp, meta, 2)),
@@ -629,5 +634,5 @@ def write_recording(rec: Recording, path: str | os.PathLike,
         if not isinstance(truth, GroundTruth):
             raise TypeError(f"truth must be a GroundTruth, was {type(truth).__name__}")
         content = truth.to_dict()
-        jobs.append((truth_path, lambda tmp: dump_json(tmp, content, None)))
-    return write_group(jobs, remove=() if truth is not None else (truth_path,))
+        jobs.append((tpath, lambda tmp: dump_json(tmp, content, None)))
+    return write_group(jobs, remove=() if truth is not None else (tpath,))

@@ -69,11 +69,10 @@ def load_inputs(paths, meta: Path | None, channels: dict | None = None) -> list:
 
 def _load(path: Path, meta: Path | None, channels: dict | None = None):
     """(Recording, truth or None) of one file; every problem is an InputError."""
-    from .._io_checks import stem_of
-    from ..io import read_recording, read_truth
+    from ..io import read_recording, read_truth, truth_path
 
     rec = read_recording(path, meta=meta, channels=channels)
-    truth_file = path.with_name(f"{stem_of(path)}.truth.json")
+    truth_file = truth_path(path)
     truth = read_truth(truth_file) if truth_file.is_file() else None
     return rec, truth
 
