@@ -77,10 +77,18 @@ def test_a_law_not_excluded_by_the_recording_is_said_in_text_and_html():
 
 
 def test_an_offered_effect_without_a_fit_is_said_with_its_reason():
-    from vidiscover.commands.gap import human_gap
-    from vidiscover.gap.diagnose import NOT_FITTED
+    from types import SimpleNamespace
 
-    why = NOT_FITTED["velocity_dependent_restitution"]
+    from vidiscover.commands.gap import human_gap
+    from vidiscover.gap.fit import not_fitted_reason
+
+    impacts = SimpleNamespace(real=SimpleNamespace(r_pooled=0.8))
+    none = SimpleNamespace(real=SimpleNamespace(r_pooled=float("nan")))
+    why = not_fitted_reason(impacts, "velocity_dependent_restitution")
+    # without impacts the law is not fitted for want of them, not as constants per wall
+    assert "no impact" in not_fitted_reason(none, "velocity_dependent_restitution")
+    assert "no impact" in not_fitted_reason(none, "asymmetric_restitution")
+    assert "band" in not_fitted_reason(impacts, "sensor_resonance")
     doc = {"recording": "r", "gap_before": 40.0, "gap_after": 0.8, "threshold": 8.0,
            "significant": True, "verdict": "asymmetric_restitution", "unexplained": 0.02,
            "not_fitted": {"velocity_dependent_restitution": why},

@@ -46,6 +46,7 @@ from .fit import (
     _shift_walls,
     best_draw,
     fit_candidate,
+    not_fitted_reason,
     profile_ci,
     signature_item,
     symmetric,
@@ -113,7 +114,8 @@ class GapReport:
         Selected effect -> parameter -> approximate 95 % interval
         (:func:`~vidiscover.gap.fit.profile_ci`).
     not_fitted : dict
-        Offered effects this recording gives no fit of -> why (:data:`NOT_FITTED`).
+        Offered effects this recording gives no fit of -> why
+        (:func:`~vidiscover.gap.fit.not_fitted_reason`).
     """
 
     name: str
@@ -1165,16 +1167,6 @@ def _laser_tie(model: Model, fits: list[CandidateFit]) -> list[CandidateFit]:
     return fits if win is best else [win] + [f for f in fits if f is not win]
 
 
-#: Why an offered effect has no fit on a recording (:attr:`GapReport.not_fitted`).
-NOT_FITTED = {
-    "velocity_dependent_restitution":
-        "no wall's r moves with its impact speed beyond the precision of r: the law "
-        "would be constants per wall (asymmetric_restitution)",
-}
-#: ... for the other effects: what they need is not in the recording.
-NOT_FITTED_OTHER = "the recording has nothing this effect acts on (no impacts on a wall)"
-
-
 def _diagnose_with(rec, seed, names, an, run) -> GapReport:
     model, nominal, n_sims = nominal_model(rec, an, seed=seed, run=run)
     if nominal.gap.total < SIGNIFICANT_DROP:
@@ -1187,7 +1179,7 @@ def _diagnose_with(rec, seed, names, an, run) -> GapReport:
                            cost=lambda it: FIT_COST.get(it[1], 1))
             if f is not None]
     fitted = {f.name for f in fits}
-    not_fitted = {n: NOT_FITTED.get(n, NOT_FITTED_OTHER) for n in names if n not in fitted}
+    not_fitted = {n: not_fitted_reason(model, n) for n in names if n not in fitted}
     n_sims += sum(f.n_sims for f in fits)
     fits = _parsimonious(sorted(fits, key=lambda c: c.score))
     significant = _significant(nominal, fits)

@@ -922,6 +922,27 @@ def _fit_resonance(model: Model, base: Effects):
     return {"f_s": float(fl), "zeta_s": zeta}, 2, model.params.r, 1
 
 
+def not_fitted_reason(model: Model, name: str) -> str:
+    """Why :func:`fit_candidate` gave no fit of ``name`` on ``model``'s recording.
+
+    One reason per ``return None`` of the fitters above: the restitution effects need
+    impacts with a measured r; beyond that the law per wall is refused only as the
+    constants per wall it would be (:func:`_fit_velocity`); the resonance needs a band
+    of the residual spectrum to look in (:func:`_fit_resonance`).
+    """
+    if name in _WALL_FITS and not np.isfinite(model.real.r_pooled):
+        return "no impact with a measured r in this recording"
+    if name == "velocity_dependent_restitution":
+        return ("no wall's r moves with its impact speed beyond the precision of r: the "
+                "law would be constants per wall (asymmetric_restitution)")
+    if name == "sensor_resonance":
+        return "the sample rate leaves no band of the residual spectrum (25 Hz to 0.45 fs)"
+    return "the recording has nothing this effect acts on"
+
+
+#: The candidates that set each wall's restitution.
+_WALL_FITS = ("asymmetric_restitution", "velocity_dependent_restitution")
+
 #: Candidate name -> fitter(model, base_effects) -> (params, n_params, r, n_sims) or None;
 #: a 1-D fitter adds the base effects as simulated (per-wall restitution re-fitted).
 #: Candidates fitted by a 1-D search of the gap (:class:`_Objective`): the restitution
